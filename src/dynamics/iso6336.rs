@@ -1,0 +1,43 @@
+//! Mesh stiffness after ISO 6336-1:2019, method B (Sect. 9): the independent reference the
+//! analytic and FE mesh stiffness are checked against.
+
+use crate::gear::GearPair;
+
+/// Theoretical single stiffness c′_th = 1/q′ in N/(mm·µm), from the q′ series (ISO 6336-1, Eq. 42,
+/// Table 9) with virtual tooth numbers z_n = z / cos³β.
+pub fn theoretical_single_stiffness(pair: &GearPair) -> f64 {
+    let cos3 = pair.helix_angle_rad.cos().powi(3);
+    let zn1 = pair.gear1.teeth as f64 / cos3;
+    let zn2 = pair.gear2.teeth as f64 / cos3;
+    let (x1, x2) = (pair.gear1.profile_shift, pair.gear2.profile_shift);
+    let q = 0.04723 + 0.15551 / zn1 + 0.25791 / zn2
+        - 0.00635 * x1
+        - 0.11654 * x1 / zn1
+        - 0.00193 * x2
+        - 0.24188 * x2 / zn2
+        + 0.00529 * x1 * x1
+        + 0.00182 * x2 * x2;
+    1.0 / q
+}
+
+/// Single stiffness c′ = c′_th·C_M·C_R·C_B·cos β in N/(mm·µm): solid gear blanks (C_R = 1),
+/// C_M = 0.8, and the basic-rack factor C_B from the dedendum of the rack (h_fP/m_n).
+pub fn single_stiffness(pair: &GearPair) -> f64 {
+    let dedendum_coefficient = pair.rack_dedendum_coefficient;
+    let c_m = 0.8;
+    let c_r = 1.0;
+    let c_b = (1.0 + 0.5 * (1.2 - dedendum_coefficient))
+        * (1.0 - 0.02 * (20.0 - pair.normal_pressure_angle_rad.to_degrees()));
+    theoretical_single_stiffness(pair) * c_m * c_r * c_b * pair.helix_angle_rad.cos()
+}
+
+/// Mean mesh stiffness c_γα = c′·(0.75 ε_α + 0.25) in N/(mm·µm) (ISO 6336-1 Eq. 43), valid for
+/// specific loads F_t·K_A/b ≥ 100 N/mm.
+pub fn mesh_stiffness_c_gamma_alpha(pair: &GearPair) -> f64 {
+    single_stiffness(pair) * (0.75 * pair.transverse_contact_ratio + 0.25)
+}
+
+/// Converts a stiffness per face width in N/(mm·µm) to a total stiffness in N/m.
+pub fn to_newton_per_metre(c_n_per_mm_um: f64, face_width_m: f64) -> f64 {
+    c_n_per_mm_um * 1e6 * face_width_m * 1e3
+}

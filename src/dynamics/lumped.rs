@@ -1,0 +1,281 @@
+//! The lumped gear-pair model: two rigid gears on the line of action, coupled by a mesh whose
+//! stiffness varies with the roll position, with backlash, contact loss and back-flank contact.
+//!
+//! Mesh deflection δ = TE = r_b1·θ₁ − r_b2·θ₂ (design §3). The mesh stores the potential
+//! V(θ₁, θ₂) = ½K(ξ)·δ² on the drive flank (δ > 0) and ½K_c(ξ)·(δ + j)² on the coast flank
+//! (δ < −j), with ξ = r_b1·θ₁ + ξ₀ the roll position. Generalized forces are −∂V/∂θ, so the
+//! model conserves energy exactly: besides the mesh force F = ∂V/∂δ it carries the torque
+//! −r_b1·½K′(ξ)δ² that the varying stiffness exerts on the driver. A new tooth pair entering
+//! contact is a steep but continuous ramp of K over one table interval; its work is this torque.
+//! Damping c·δ̇ acts only while a flank is in contact, and a flank never pulls.
+
+use super::mesh_stiffness::{mesh_stiffness_table, MeshStiffnessTable};
+use crate::gear::GearPair;
+use serde::{Deserialize, Serialize};
+
+/// Everything the lumped model needs at run time: plain data, written into the FMU resources.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LumpedMesh {
+    pub teeth_1: u32,
+    pub teeth_2: u32,
+    pub base_radius_1_m: f64,
+    pub base_radius_2_m: f64,
+    pub inertia_1_kgm2: f64,
+    pub inertia_2_kgm2: f64,
+    pub base_pitch_m: f64,
+    /// Backlash along the LOA: the gap between the coast flanks when the drive flanks touch.
+    pub backlash_m: f64,
+    pub mesh_damping_ratio: f64,
+    /// Roll position at θ₁ = 0: a tooth pair then touches at the pitch point (the reference mesh
+    /// position where both angles are zero).
+    pub roll_offset_m: f64,
+    /// Drive- and coast-flank stiffness along the LOA at ξ_i = i·p_b/N, periodic.
+    pub drive_stiffness_n_per_m: Vec<f64>,
+    pub coast_stiffness_n_per_m: Vec<f64>,
+    pub drive_pairs: Vec<u32>,
+    pub coast_pairs: Vec<u32>,
+}
+
+/// Roll-position samples per base pitch and axial slices for helical gears.
+pub const TABLE_SAMPLES: usize = 1024;
+pub const AXIAL_SLICES: usize = 40;
+
+impl LumpedMesh {
+    /// Builds the lumped mesh from the geometry (potential-energy stiffness; offline).
+    pub fn from_pair(pair: &GearPair) -> LumpedMesh {
+        let MeshStiffnessTable {
+            stiffness_n_per_m,
+            pairs_in_contact,
+            ..
+        } = mesh_stiffness_table(pair, TABLE_SAMPLES, AXIAL_SLICES);
+        let n = stiffness_n_per_m.len();
+        let roll_offset = pair.pitch_point_m() - pair.path_start_m;
+        // Coast flank: the mirror image of the drive flank about the reference position (symmetric
+        // teeth). The phase between drive and coast contact, set by tooth thickness, is neglected.
+        let offset_index = (roll_offset / pair.base_pitch_m * n as f64).round() as usize;
+        let mirror = |i: usize| (2 * offset_index + 2 * n - i) % n;
+        let coast_stiffness = (0..n).map(|i| stiffness_n_per_m[mirror(i)]).collect();
+        let coast_pairs = (0..n).map(|i| pairs_in_contact[mirror(i)]).collect();
+        LumpedMesh {
+            teeth_1: pair.gear1.teeth,
+            teeth_2: pair.gear2.teeth,
+            base_radius_1_m: pair.gear1.base_radius_m,
+            base_radius_2_m: pair.gear2.base_radius_m,
+            inertia_1_kgm2: pair.gear1.inertia_kgm2,
+            inertia_2_kgm2: pair.gear2.inertia_kgm2,
+            base_pitch_m: pair.base_pitch_m,
+            backlash_m: pair.backlash_loa_m,
+            mesh_damping_ratio: pair.mesh_damping_ratio,
+            roll_offset_m: roll_offset,
+            drive_stiffness_n_per_m: stiffness_n_per_m,
+            coast_stiffness_n_per_m: coast_stiffness,
+            drive_pairs: pairs_in_contact,
+            coast_pairs,
+        }
+    }
+
+    pub fn mean_drive_stiffness(&self) -> f64 {
+        self.drive_stiffness_n_per_m.iter().sum::<f64>() / self.drive_stiffness_n_per_m.len() as f64
+    }
+}
+
+/// Run-time parameters of a lumped model instance (FMU parameters may override the defaults).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LumpedParameters {
+    pub inertia_1_kgm2: f64,
+    pub inertia_2_kgm2: f64,
+    pub mesh_damping_ratio: f64,
+}
+
+/// Equivalent mass of the mesh mode along the LOA: 1/m_e = r_b1²/J₁ + r_b2²/J₂.
+pub fn equivalent_mesh_mass(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
+    1.0 / (mesh.base_radius_1_m.powi(2) / p.inertia_1_kgm2
+        + mesh.base_radius_2_m.powi(2) / p.inertia_2_kgm2)
+}
+
+/// Natural frequency (Hz) of the mesh mode from the mean drive stiffness: √(k̄/m_e)/2π.
+pub fn mesh_natural_frequency_hz(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
+    (mesh.mean_drive_stiffness() / equivalent_mesh_mass(mesh, p)).sqrt()
+        / (2.0 * std::f64::consts::PI)
+}
+
+/// Mesh damping coefficient c = 2ζ√(k̄·m_e) (N·s/m).
+pub fn mesh_damping_coefficient(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
+    2.0 * p.mesh_damping_ratio
+        * (mesh.mean_drive_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
+}
+
+/// The state of the two rigid gears, plus the work integrals that the energy balance needs.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct LumpedState {
+    pub theta_1: f64,
+    pub omega_1: f64,
+    pub theta_2: f64,
+    pub omega_2: f64,
+    /// ∫(τ₁ω₁ + τ₂ω₂)dt: work of the shaft torques.
+    pub input_work_j: f64,
+    /// ∫(F − F_elastic)·δ̇ dt: work dissipated by mesh damping.
+    pub dissipated_j: f64,
+}
+
+/// What the mesh does at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MeshState {
+    /// δ = r_b1θ₁ − r_b2θ₂ (m).
+    pub transmission_error_m: f64,
+    /// Normal force along the LOA (N), negative on the coast flank.
+    pub force_n: f64,
+    /// Elastic part of the force (N).
+    pub elastic_force_n: f64,
+    /// −∂V/∂ξ: force of the varying stiffness on the roll coordinate (N).
+    pub roll_force_n: f64,
+    /// Stiffness of the flank in contact (0 if none).
+    pub stiffness_n_per_m: f64,
+    pub pairs_in_contact: u32,
+    /// Elastic energy V (J).
+    pub potential_j: f64,
+}
+
+/// Periodic piecewise-linear table: value and slope at roll ξ.
+fn interpolate(table: &[f64], pitch: f64, xi: f64) -> (f64, f64) {
+    let n = table.len();
+    let dx = pitch / n as f64;
+    let pos = xi.rem_euclid(pitch) / dx;
+    let i = (pos.floor() as usize).min(n - 1);
+    let t = pos - i as f64;
+    let (a, b) = (table[i], table[(i + 1) % n]);
+    (a + t * (b - a), (b - a) / dx)
+}
+
+fn nearest(table: &[u32], pitch: f64, xi: f64) -> u32 {
+    let n = table.len();
+    let i = (xi.rem_euclid(pitch) / pitch * n as f64).round() as usize % n;
+    table[i]
+}
+
+/// The lumped model at run time: mesh data plus parameters, with the damping precomputed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LumpedModel {
+    pub mesh: LumpedMesh,
+    pub params: LumpedParameters,
+    pub damping_n_s_per_m: f64,
+}
+
+impl LumpedModel {
+    pub fn new(mesh: LumpedMesh, params: LumpedParameters) -> Self {
+        let damping = mesh_damping_coefficient(&mesh, &params);
+        LumpedModel {
+            mesh,
+            params,
+            damping_n_s_per_m: damping,
+        }
+    }
+
+    pub fn with_defaults(mesh: LumpedMesh) -> Self {
+        let params = LumpedParameters {
+            inertia_1_kgm2: mesh.inertia_1_kgm2,
+            inertia_2_kgm2: mesh.inertia_2_kgm2,
+            mesh_damping_ratio: mesh.mesh_damping_ratio,
+        };
+        Self::new(mesh, params)
+    }
+
+    /// The mesh force law at a state (see the module comment).
+    pub fn mesh_state(&self, s: &LumpedState) -> MeshState {
+        let m = &self.mesh;
+        let delta = m.base_radius_1_m * s.theta_1 - m.base_radius_2_m * s.theta_2;
+        let delta_dot = m.base_radius_1_m * s.omega_1 - m.base_radius_2_m * s.omega_2;
+        let xi = m.base_radius_1_m * s.theta_1 + m.roll_offset_m;
+        let c = self.damping_n_s_per_m;
+        let mut out = MeshState {
+            transmission_error_m: delta,
+            ..Default::default()
+        };
+        if delta > 0.0 {
+            let (k, dk) = interpolate(&m.drive_stiffness_n_per_m, m.base_pitch_m, xi);
+            out.elastic_force_n = k * delta;
+            out.force_n = (k * delta + c * delta_dot).max(0.0);
+            out.roll_force_n = -0.5 * dk * delta * delta;
+            out.stiffness_n_per_m = k;
+            out.potential_j = 0.5 * k * delta * delta;
+            out.pairs_in_contact = nearest(&m.drive_pairs, m.base_pitch_m, xi);
+        } else if delta < -m.backlash_m {
+            let d = delta + m.backlash_m;
+            let (k, dk) = interpolate(&m.coast_stiffness_n_per_m, m.base_pitch_m, xi);
+            out.elastic_force_n = k * d;
+            out.force_n = (k * d + c * delta_dot).min(0.0);
+            out.roll_force_n = -0.5 * dk * d * d;
+            out.stiffness_n_per_m = k;
+            out.potential_j = 0.5 * k * d * d;
+            out.pairs_in_contact = nearest(&m.coast_pairs, m.base_pitch_m, xi);
+        }
+        out
+    }
+
+    /// Time derivative of the state under shaft torques τ₁, τ₂ (N·m).
+    pub fn derivative(&self, s: &LumpedState, torques: [f64; 2]) -> LumpedState {
+        let m = &self.mesh;
+        let mesh = self.mesh_state(s);
+        let delta_dot = m.base_radius_1_m * s.omega_1 - m.base_radius_2_m * s.omega_2;
+        let torque_1 =
+            torques[0] - m.base_radius_1_m * mesh.force_n + m.base_radius_1_m * mesh.roll_force_n;
+        let torque_2 = torques[1] + m.base_radius_2_m * mesh.force_n;
+        LumpedState {
+            theta_1: s.omega_1,
+            omega_1: torque_1 / self.params.inertia_1_kgm2,
+            theta_2: s.omega_2,
+            omega_2: torque_2 / self.params.inertia_2_kgm2,
+            input_work_j: torques[0] * s.omega_1 + torques[1] * s.omega_2,
+            dissipated_j: (mesh.force_n - mesh.elastic_force_n) * delta_dot,
+        }
+    }
+
+    /// Kinetic energy of both gears (J).
+    pub fn kinetic_energy(&self, s: &LumpedState) -> f64 {
+        0.5 * self.params.inertia_1_kgm2 * s.omega_1.powi(2)
+            + 0.5 * self.params.inertia_2_kgm2 * s.omega_2.powi(2)
+    }
+
+    /// One classical Runge–Kutta step of length h with the torques held.
+    pub fn rk4_step(&self, s: &LumpedState, torques: [f64; 2], h: f64) -> LumpedState {
+        let k1 = self.derivative(s, torques);
+        let k2 = self.derivative(&axpy(s, 0.5 * h, &k1), torques);
+        let k3 = self.derivative(&axpy(s, 0.5 * h, &k2), torques);
+        let k4 = self.derivative(&axpy(s, h, &k3), torques);
+        let sum = LumpedState {
+            theta_1: k1.theta_1 + 2.0 * k2.theta_1 + 2.0 * k3.theta_1 + k4.theta_1,
+            omega_1: k1.omega_1 + 2.0 * k2.omega_1 + 2.0 * k3.omega_1 + k4.omega_1,
+            theta_2: k1.theta_2 + 2.0 * k2.theta_2 + 2.0 * k3.theta_2 + k4.theta_2,
+            omega_2: k1.omega_2 + 2.0 * k2.omega_2 + 2.0 * k3.omega_2 + k4.omega_2,
+            input_work_j: k1.input_work_j
+                + 2.0 * k2.input_work_j
+                + 2.0 * k3.input_work_j
+                + k4.input_work_j,
+            dissipated_j: k1.dissipated_j
+                + 2.0 * k2.dissipated_j
+                + 2.0 * k3.dissipated_j
+                + k4.dissipated_j,
+        };
+        axpy(s, h / 6.0, &sum)
+    }
+
+    /// Advances the state over `duration` in equal RK4 sub-steps no longer than `max_step`.
+    pub fn advance(&self, s: &mut LumpedState, torques: [f64; 2], duration: f64, max_step: f64) {
+        let n = (duration / max_step).ceil().max(1.0) as usize;
+        let h = duration / n as f64;
+        for _ in 0..n {
+            *s = self.rk4_step(s, torques, h);
+        }
+    }
+}
+
+fn axpy(s: &LumpedState, a: f64, d: &LumpedState) -> LumpedState {
+    LumpedState {
+        theta_1: s.theta_1 + a * d.theta_1,
+        omega_1: s.omega_1 + a * d.omega_1,
+        theta_2: s.theta_2 + a * d.theta_2,
+        omega_2: s.omega_2 + a * d.omega_2,
+        input_work_j: s.input_work_j + a * d.input_work_j,
+        dissipated_j: s.dissipated_j + a * d.dissipated_j,
+    }
+}

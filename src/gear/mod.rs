@@ -1,0 +1,372 @@
+//! Gear-pair geometry and kinematics in SI units, built (and validated) from a [`PairSpec`].
+//!
+//! Conventions (design §3): gear 1 drives, gear 2 is driven; angles are positive in each gear's
+//! own sense of mesh rotation (z₁θ₁ = z₂θ₂). Positions on the line of action (LOA) are lengths
+//! `u` measured from T₁, the point where the LOA touches gear 1's base circle, towards T₂.
+
+pub mod fillet;
+pub mod involute;
+pub mod spec;
+
+use involute::{inv, inv_inverse};
+use serde::{Deserialize, Serialize};
+use spec::invalid;
+pub use spec::{PairSpec, SpecError};
+use std::f64::consts::PI;
+
+/// One gear's radii and mass properties (SI).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Gear {
+    pub teeth: u32,
+    pub profile_shift: f64,
+    pub pitch_radius_m: f64,
+    pub base_radius_m: f64,
+    pub tip_radius_m: f64,
+    pub root_radius_m: f64,
+    pub bore_radius_m: f64,
+    /// Radius at which the generated involute ends and the trochoidal fillet begins.
+    pub form_radius_m: f64,
+    /// Half tooth-thickness angle at the reference (pitch) circle, transverse section.
+    pub half_thickness_angle_pitch_rad: f64,
+    /// The trochoidal root fillet as (radius, half tooth-thickness angle), root circle upwards.
+    pub fillet: Vec<(f64, f64)>,
+    pub inertia_kgm2: f64,
+}
+
+impl Gear {
+    /// Half tooth-thickness angle at radius r on the involute (transverse section).
+    pub fn half_thickness_angle(&self, radius_m: f64, transverse_pressure_angle: f64) -> f64 {
+        let alpha_r = (self.base_radius_m / radius_m).min(1.0).acos();
+        self.half_thickness_angle_pitch_rad + inv(transverse_pressure_angle) - inv(alpha_r)
+    }
+
+    /// Half tooth-thickness angle of the real profile at radius r: the generated fillet from the
+    /// root circle up to where it meets the involute, the involute above.
+    pub fn profile_half_thickness_angle(
+        &self,
+        radius_m: f64,
+        transverse_pressure_angle: f64,
+    ) -> f64 {
+        match self.fillet.last() {
+            Some(&(r_join, _)) if radius_m < r_join => {
+                let i = self
+                    .fillet
+                    .partition_point(|&(r, _)| r < radius_m)
+                    .clamp(1, self.fillet.len() - 1);
+                let ((r0, a0), (r1, a1)) = (self.fillet[i - 1], self.fillet[i]);
+                a0 + (a1 - a0) * (radius_m - r0) / (r1 - r0)
+            }
+            _ => self.half_thickness_angle(radius_m, transverse_pressure_angle),
+        }
+    }
+}
+
+/// A meshing pair, everything downstream needs about geometry and kinematics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GearPair {
+    pub name: String,
+    pub gear1: Gear,
+    pub gear2: Gear,
+    pub normal_module_m: f64,
+    pub normal_pressure_angle_rad: f64,
+    pub helix_angle_rad: f64,
+    pub base_helix_angle_rad: f64,
+    pub transverse_pressure_angle_rad: f64,
+    pub face_width_m: f64,
+    pub center_distance_m: f64,
+    /// Operating transverse pressure angle, from the center distance.
+    pub operating_pressure_angle_rad: f64,
+    /// Transverse base pitch p_bt: distance between successive tooth pairs along the LOA.
+    pub base_pitch_m: f64,
+    /// Start (A, mating tip circle of gear 2) and end (E, tip circle of gear 1) of the path of
+    /// contact, as distances from T₁ along the LOA.
+    pub path_start_m: f64,
+    pub path_end_m: f64,
+    /// Transverse contact ratio ε_α and overlap ratio ε_β.
+    pub transverse_contact_ratio: f64,
+    pub overlap_ratio: f64,
+    /// Total backlash measured along the transverse LOA.
+    pub backlash_loa_m: f64,
+    pub youngs_modulus_pa: f64,
+    pub poisson_ratio: f64,
+    pub density_kg_m3: f64,
+    pub mesh_damping_ratio: f64,
+    /// Dedendum of the basic rack over the module, h_fP/m_n (ISO 6336-1's C_B needs it).
+    pub rack_dedendum_coefficient: f64,
+}
+
+impl GearPair {
+    /// Length T₁T₂ of the line of action between the base-circle tangent points.
+    pub fn loa_length_m(&self) -> f64 {
+        self.center_distance_m * self.operating_pressure_angle_rad.sin()
+    }
+
+    /// Pitch point C, distance from T₁.
+    pub fn pitch_point_m(&self) -> f64 {
+        self.gear1.base_radius_m * self.operating_pressure_angle_rad.tan()
+    }
+
+    /// Length of the path of contact AE.
+    pub fn path_length_m(&self) -> f64 {
+        self.path_end_m - self.path_start_m
+    }
+
+    /// Radii of curvature of the two involutes at a contact point u (from T₁) on the LOA,
+    /// in the transverse plane: each is the distance to its own base-circle tangent point.
+    pub fn radii_of_curvature(&self, u_m: f64) -> (f64, f64) {
+        (u_m, self.loa_length_m() - u_m)
+    }
+
+    /// Radius on gear 1 and on gear 2 of the contact point at u (from T₁).
+    pub fn contact_radii(&self, u_m: f64) -> (f64, f64) {
+        let (rho1, rho2) = self.radii_of_curvature(u_m);
+        (
+            self.gear1.base_radius_m.hypot(rho1),
+            self.gear2.base_radius_m.hypot(rho2),
+        )
+    }
+
+    pub fn from_spec(spec: &PairSpec) -> Result<GearPair, SpecError> {
+        build_pair(spec)
+    }
+}
+
+fn positive(field: &str, value: f64) -> Result<f64, SpecError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(invalid(
+            field,
+            format!("must be a positive finite number, got {value}"),
+        ))
+    }
+}
+
+fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
+    let rack = &spec.rack;
+    let mn = positive("rack.module_mm", rack.module_mm)? * 1e-3;
+    let alpha_n_deg = positive("rack.pressure_angle_deg", rack.pressure_angle_deg)?;
+    if alpha_n_deg >= 45.0 {
+        return Err(invalid("rack.pressure_angle_deg", "must be below 45°"));
+    }
+    if !(0.0..45.0).contains(&rack.helix_angle_deg) {
+        return Err(invalid("rack.helix_angle_deg", "must be in [0°, 45°)"));
+    }
+    let ha = positive("rack.addendum_coefficient", rack.addendum_coefficient)?;
+    let hf = positive("rack.dedendum_coefficient", rack.dedendum_coefficient)?;
+    let rho_f = rack.cutter_tip_radius_coefficient;
+    if !(0.0..=0.6).contains(&rho_f) || hf <= ha {
+        return Err(invalid(
+            "rack.cutter_tip_radius_coefficient",
+            "must be in [0, 0.6] with dedendum_coefficient > addendum_coefficient (tip clearance)",
+        ));
+    }
+    let mat = &spec.material;
+    let e = positive("material.youngs_modulus_gpa", mat.youngs_modulus_gpa)? * 1e9;
+    let nu = mat.poisson_ratio;
+    if !(0.0..0.5).contains(&nu) {
+        return Err(invalid("material.poisson_ratio", "must be in [0, 0.5)"));
+    }
+    let rho = positive("material.density_kg_m3", mat.density_kg_m3)?;
+    let b = positive("mounting.face_width_mm", spec.mounting.face_width_mm)? * 1e-3;
+    if !(spec.mounting.backlash_mm.is_finite() && spec.mounting.backlash_mm >= 0.0) {
+        return Err(invalid(
+            "mounting.backlash_mm",
+            "must be a finite number ≥ 0",
+        ));
+    }
+    let zeta = spec.mounting.mesh_damping_ratio;
+    if !(zeta.is_finite() && (0.0..1.0).contains(&zeta)) {
+        return Err(invalid("mounting.mesh_damping_ratio", "must be in [0, 1)"));
+    }
+
+    let alpha_n = alpha_n_deg.to_radians();
+    let beta = rack.helix_angle_deg.to_radians();
+    let alpha_t = (alpha_n.tan() / beta.cos()).atan();
+    let mt = mn / beta.cos();
+    let beta_b = (beta.tan() * alpha_t.cos()).atan();
+
+    let gear = |which: &str, g: &spec::GearSpec| -> Result<Gear, SpecError> {
+        if g.teeth <= 0 {
+            return Err(invalid(
+                &format!("{which}.teeth"),
+                "must be a positive integer",
+            ));
+        }
+        let z = g.teeth as f64;
+        let x = g.profile_shift;
+        if !x.is_finite() || x.abs() > 1.5 {
+            return Err(invalid(
+                &format!("{which}.profile_shift"),
+                "must be in [-1.5, 1.5]",
+            ));
+        }
+        let r = z * mt / 2.0;
+        let rb = r * alpha_t.cos();
+        let ra = r + mn * (ha + x);
+        let rf = r - mn * (hf - x);
+        // Undercut: the end of the rack's straight flank (height h_lim below the datum line,
+        // measured along the normal to the pitch line) must not pass below the interference
+        // point, which lies r·sin²α_t below the pitch line.
+        let h_lim = mn * (hf - rho_f * (1.0 - alpha_n.sin()) - x);
+        if h_lim > r * alpha_t.sin().powi(2) + 1e-12 {
+            return Err(invalid(
+                &format!("{which}.teeth"),
+                format!(
+                    "the rack cutter undercuts this gear (z = {}, x = {x}): need \
+                     (h_fP − ρ_fP(1−sin α_n) − x)·m_n ≤ r·sin²α_t; raise the teeth or the profile shift",
+                    g.teeth
+                ),
+            ));
+        }
+        // The generated involute starts where the rack's straight flank ends.
+        let u_form = r * alpha_t.sin() - h_lim / alpha_t.sin();
+        let form_radius = rb.hypot(u_form.max(0.0));
+        let bore = positive(&format!("{which}.bore_radius_mm"), g.bore_radius_mm)? * 1e-3;
+        if bore >= rf - mn {
+            return Err(invalid(
+                &format!("{which}.bore_radius_mm"),
+                format!(
+                    "must leave a rim of at least one module below the root circle ({:.2} mm)",
+                    rf * 1e3
+                ),
+            ));
+        }
+        let psi_p = (PI / 2.0 + 2.0 * x * alpha_n.tan()) / z;
+        let half_tip = psi_p + inv(alpha_t) - inv((rb / ra).acos());
+        if half_tip <= 0.0 {
+            return Err(invalid(
+                &format!("{which}.profile_shift"),
+                "the tooth comes to a point below the tip circle",
+            ));
+        }
+        // Mass: rim/web as a full annulus bore..root, the tooth ring root..tip about half filled
+        // (the FE mesh of a later issue gives the exact figure). Overridable in the spec.
+        let inertia_geom =
+            rho * b * PI / 2.0 * ((rf.powi(4) - bore.powi(4)) + 0.5 * (ra.powi(4) - rf.powi(4)));
+        let inertia = match g.inertia_kgm2 {
+            Some(j) => positive(&format!("{which}.inertia_kgm2"), j)?,
+            None => inertia_geom,
+        };
+        Ok(Gear {
+            teeth: g.teeth as u32,
+            profile_shift: x,
+            pitch_radius_m: r,
+            base_radius_m: rb,
+            tip_radius_m: ra,
+            root_radius_m: rf,
+            bore_radius_m: bore,
+            form_radius_m: form_radius,
+            half_thickness_angle_pitch_rad: psi_p,
+            fillet: fillet::fillet_profile(
+                &fillet::RackCutter {
+                    module_m: mt,
+                    pressure_angle_rad: alpha_t,
+                    dedendum_coefficient: hf,
+                    tip_radius_coefficient: rho_f,
+                    profile_shift: x * mn / mt,
+                },
+                r,
+                g.teeth as u32,
+            ),
+            inertia_kgm2: inertia,
+        })
+    };
+    let g1 = gear("gear1", &spec.gear1)?;
+    let g2 = gear("gear2", &spec.gear2)?;
+
+    // Operating center distance and pressure angle.
+    let (z1, z2) = (g1.teeth as f64, g2.teeth as f64);
+    let inv_w0 =
+        inv(alpha_t) + 2.0 * alpha_n.tan() * (g1.profile_shift + g2.profile_shift) / (z1 + z2);
+    let alpha_w0 = inv_inverse(inv_w0);
+    let a0 = (g1.base_radius_m + g2.base_radius_m) / alpha_w0.cos();
+    let a = match spec.mounting.center_distance_mm {
+        None => a0,
+        Some(a_mm) => positive("mounting.center_distance_mm", a_mm)? * 1e-3,
+    };
+    let cos_w = (g1.base_radius_m + g2.base_radius_m) / a;
+    if cos_w >= 1.0 {
+        return Err(invalid(
+            "mounting.center_distance_mm",
+            "is not larger than the sum of the base radii",
+        ));
+    }
+    let alpha_w = cos_w.acos();
+    // Backlash the center distance makes: operating circular pitch minus both tooth thicknesses
+    // at the operating pitch circles, then measured along the LOA.
+    let rw1 = g1.base_radius_m / cos_w;
+    let rw2 = g2.base_radius_m / cos_w;
+    let s_w1 = 2.0 * rw1 * g1.half_thickness_angle(rw1, alpha_t);
+    let s_w2 = 2.0 * rw2 * g2.half_thickness_angle(rw2, alpha_t);
+    let backlash_geom_loa = (2.0 * PI * rw1 / z1 - s_w1 - s_w2) * cos_w;
+    if backlash_geom_loa < -1e-9 {
+        return Err(invalid(
+            "mounting.center_distance_mm",
+            format!(
+                "the gears cannot mesh at {:.4} mm: below the zero-backlash distance {:.4} mm the teeth interfere",
+                a * 1e3,
+                a0 * 1e3
+            ),
+        ));
+    }
+    let backlash_loa = backlash_geom_loa.max(0.0) + spec.mounting.backlash_mm * 1e-3 / beta_b.cos();
+
+    let loa = a * alpha_w.sin();
+    let path_start = loa - (g2.tip_radius_m.powi(2) - g2.base_radius_m.powi(2)).sqrt();
+    let path_end = (g1.tip_radius_m.powi(2) - g1.base_radius_m.powi(2)).sqrt();
+    // Tip interference: each tip must meet the mate's involute, not its fillet or the region
+    // inside its base circle.
+    let u_form1 = (g1.form_radius_m.powi(2) - g1.base_radius_m.powi(2))
+        .max(0.0)
+        .sqrt();
+    let u_form2 = (g2.form_radius_m.powi(2) - g2.base_radius_m.powi(2))
+        .max(0.0)
+        .sqrt();
+    if path_start < u_form1 - 1e-12 {
+        return Err(invalid(
+            "gear2.teeth",
+            "tip interference: gear 2's tip reaches below gear 1's form circle (into the fillet)",
+        ));
+    }
+    if loa - path_end < u_form2 - 1e-12 {
+        return Err(invalid(
+            "gear1.teeth",
+            "tip interference: gear 1's tip reaches below gear 2's form circle (into the fillet)",
+        ));
+    }
+    let pbt = PI * mt * alpha_t.cos();
+    let eps_alpha = (path_end - path_start) / pbt;
+    if eps_alpha < 1.0 {
+        return Err(invalid(
+            "mounting.center_distance_mm",
+            format!(
+                "transverse contact ratio ε_α = {eps_alpha:.3} < 1: the mesh is not continuous"
+            ),
+        ));
+    }
+    Ok(GearPair {
+        name: spec.name.clone(),
+        gear1: g1,
+        gear2: g2,
+        normal_module_m: mn,
+        normal_pressure_angle_rad: alpha_n,
+        helix_angle_rad: beta,
+        base_helix_angle_rad: beta_b,
+        transverse_pressure_angle_rad: alpha_t,
+        face_width_m: b,
+        center_distance_m: a,
+        operating_pressure_angle_rad: alpha_w,
+        base_pitch_m: pbt,
+        path_start_m: path_start,
+        path_end_m: path_end,
+        transverse_contact_ratio: eps_alpha,
+        overlap_ratio: b * beta.sin() / (PI * mn),
+        backlash_loa_m: backlash_loa,
+        youngs_modulus_pa: e,
+        poisson_ratio: nu,
+        density_kg_m3: rho,
+        mesh_damping_ratio: zeta,
+        rack_dedendum_coefficient: hf,
+    })
+}

@@ -1,0 +1,133 @@
+//! The gear-pair specification: what an engineer writes in a TOML file.
+//!
+//! Units live in the key names (`module_mm`, `pressure_angle_deg`, …). The file is converted
+//! once, here, into SI (`PairSpec::load` → [`crate::gear::GearPair`]); nothing downstream sees mm.
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Errors of a spec: each names the field and the rule it broke.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    #[error("cannot read spec file {path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("spec is not valid TOML or has an unknown/missing key: {0}")]
+    Parse(String),
+    #[error("field `{field}`: {rule}")]
+    Invalid { field: String, rule: String },
+}
+
+pub(crate) fn invalid(field: &str, rule: impl Into<String>) -> SpecError {
+    SpecError::Invalid {
+        field: field.to_string(),
+        rule: rule.into(),
+    }
+}
+
+/// Hand of helix; irrelevant for spur gears (helix angle 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HelixHand {
+    Left,
+    Right,
+}
+
+/// One gear of the pair (gear 1 = pinion/driver, gear 2 = wheel/driven).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GearSpec {
+    pub teeth: i64,
+    #[serde(default)]
+    pub profile_shift: f64,
+    pub bore_radius_mm: f64,
+    /// Overrides the polar moment of inertia computed from geometry and density.
+    #[serde(default)]
+    pub inertia_kgm2: Option<f64>,
+}
+
+/// Basic rack (ISO 53 style), shared by both gears.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RackSpec {
+    pub module_mm: f64,
+    pub pressure_angle_deg: f64,
+    #[serde(default)]
+    pub helix_angle_deg: f64,
+    #[serde(default = "default_hand")]
+    pub helix_hand: HelixHand,
+    #[serde(default = "one")]
+    pub addendum_coefficient: f64,
+    #[serde(default = "default_dedendum")]
+    pub dedendum_coefficient: f64,
+    #[serde(default = "default_tip_radius")]
+    pub cutter_tip_radius_coefficient: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub youngs_modulus_gpa: f64,
+    pub poisson_ratio: f64,
+    pub density_kg_m3: f64,
+}
+
+/// How the two gears are mounted.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MountingSpec {
+    pub face_width_mm: f64,
+    /// Operating center distance; default: the zero-backlash distance of the two profiles.
+    #[serde(default)]
+    pub center_distance_mm: Option<f64>,
+    /// Normal backlash from tooth thinning, added to any backlash the center distance makes.
+    #[serde(default)]
+    pub backlash_mm: f64,
+    /// Mesh damping as a fraction of critical damping of the mesh mode.
+    #[serde(default = "default_damping")]
+    pub mesh_damping_ratio: f64,
+}
+
+/// The whole pair spec as written in the TOML file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairSpec {
+    pub name: String,
+    pub rack: RackSpec,
+    pub material: MaterialSpec,
+    pub mounting: MountingSpec,
+    pub gear1: GearSpec,
+    pub gear2: GearSpec,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_dedendum() -> f64 {
+    1.25
+}
+fn default_tip_radius() -> f64 {
+    0.38
+}
+fn default_hand() -> HelixHand {
+    HelixHand::Right
+}
+fn default_damping() -> f64 {
+    0.05
+}
+
+impl PairSpec {
+    pub fn from_toml(text: &str) -> Result<Self, SpecError> {
+        toml::from_str(text).map_err(|e| SpecError::Parse(e.to_string()))
+    }
+
+    pub fn load(path: &Path) -> Result<Self, SpecError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Self::from_toml(&text)
+    }
+}

@@ -1,0 +1,218 @@
+"""Shared fixtures for the Python-side tests of the gearfmu FMUs.
+
+* ``gear_fmus`` (session): builds KurokawaSpur.fmu and KurokawaHelical.fmu with
+  ``cargo run --release -q -p fmu-build -- build ...`` and dumps the mesh law of
+  each spec with ``fmu-build inspect --json`` into a temporary directory.
+* ``gear_case``: the same, parametrized over both gear pairs.
+* ``make_slave``: opens ``fmpy.fmi2.FMU2Slave`` instances (freed at teardown).
+* ``log_capture``: an fmi2 logger that records every message the FMUs emit.
+* ``drivetrain``: the ``examples/drivetrain.py`` module.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import json
+import math
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+
+# name used in the tests -> (spec, FMU file under target/fmu)
+GEAR_SPECS = {
+    "spur": ("examples/kurokawa_spur.toml", "KurokawaSpur.fmu"),
+    "helical": ("examples/kurokawa_helical.toml", "KurokawaHelical.fmu"),
+}
+
+REAL_OUTPUTS = ("phi_1", "phi_2", "w_1", "w_2", "dte", "dte_angle", "mesh_force", "mesh_stiffness")
+
+
+def _fmu_build(*args: str) -> subprocess.CompletedProcess:
+    cargo = shutil.which("cargo")
+    if cargo is None:
+        pytest.fail("cargo is not on PATH; cannot build the FMUs")
+    cmd = [cargo, "run", "--release", "-q", "-p", "fmu-build", "--", *args]
+    proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True)
+    if proc.returncode != 0:
+        pytest.fail(f"`{' '.join(cmd)}` failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+@dataclass(frozen=True)
+class GearCase:
+    name: str              # "spur" / "helical"
+    spec_path: Path        # examples/kurokawa_*.toml
+    fmu_path: Path         # target/fmu/Kurokawa*.fmu
+    mesh_json_path: Path   # fmu-build inspect --json dump
+    mesh: dict             # the parsed dump
+    unzip_dir: Path        # one shared extraction: all instances load the same .so
+
+
+@pytest.fixture(scope="session")
+def gear_fmus(tmp_path_factory) -> dict[str, GearCase]:
+    from fmpy import extract
+
+    out_dir = tmp_path_factory.mktemp("gearfmu")
+    cases = {}
+    for name, (spec, fmu_file) in GEAR_SPECS.items():
+        fmu_path = REPO_ROOT / "target" / "fmu" / fmu_file
+        _fmu_build("build", spec, "-o", str(fmu_path.relative_to(REPO_ROOT)))
+        mesh_json_path = out_dir / f"{name}_mesh.json"
+        _fmu_build("inspect", spec, "--json", str(mesh_json_path))
+        mesh = json.loads(mesh_json_path.read_text())
+        unzip_dir = Path(extract(str(fmu_path), unzipdir=out_dir / f"{name}_unzipped"))
+        cases[name] = GearCase(name, REPO_ROOT / spec, fmu_path, mesh_json_path, mesh, unzip_dir)
+    yield cases
+
+
+@pytest.fixture(params=sorted(GEAR_SPECS))
+def gear_case(request, gear_fmus) -> GearCase:
+    return gear_fmus[request.param]
+
+
+@pytest.fixture(scope="session")
+def drivetrain():
+    """examples/drivetrain.py, imported as a module."""
+    path = REPO_ROOT / "examples" / "drivetrain.py"
+    spec = importlib.util.spec_from_file_location("drivetrain", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["drivetrain"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+# ---------------------------------------------------------------------------
+# Logging
+# ---------------------------------------------------------------------------
+
+
+class LogCapture:
+    """An fmi2CallbackFunctions whose logger records (instance, status, category, message).
+
+    The FMU calls the logger with a printf format ("%s") and the text as a
+    variadic argument, which ctypes cannot receive.  fmpy's native
+    ``addLoggerProxy`` swaps in a C function that runs ``vsnprintf`` and then
+    calls the Python logger with the formatted text.  The proxy keeps the
+    Python logger in ONE process-wide static, so after this every fmpy proxy
+    (including fmpy's default callbacks) reports here; this object must
+    therefore live as long as the process (see ``_LOG_CAPTURE``) and records
+    are told apart by instance name.
+    """
+
+    def __init__(self):
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy.logging import addLoggerProxy
+
+        self.records: list[tuple[str, int, str, str]] = []
+        self._python_logger = fmi2CallbackLoggerTYPE(self._log)
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = self._python_logger
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(ctypes.byref(self.callbacks))
+
+    def _log(self, env, instance_name, status, category, message):
+        decode = lambda b: b.decode("utf-8", "replace") if b is not None else ""
+        self.records.append((decode(instance_name), int(status), decode(category), decode(message)))
+
+    def for_instance(self, instance_name: str) -> list[tuple[int, str, str]]:
+        return [(s, c, m) for (i, s, c, m) in self.records if i == instance_name]
+
+
+_LOG_CAPTURE: LogCapture | None = None
+
+
+@pytest.fixture(scope="session")
+def log_capture() -> LogCapture:
+    global _LOG_CAPTURE
+    if _LOG_CAPTURE is None:
+        _LOG_CAPTURE = LogCapture()
+    return _LOG_CAPTURE
+
+
+# ---------------------------------------------------------------------------
+# FMU instances
+# ---------------------------------------------------------------------------
+
+
+class GearSlave:
+    """A thin wrapper over fmpy's FMU2Slave for one gear-pair instance."""
+
+    def __init__(self, case: GearCase, instance_name: str, callbacks=None, logging_on=False,
+                 parameters: dict | None = None, start_time: float = 0.0):
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        model = read_model_description(str(case.fmu_path))
+        self.vr = {v.name: v.valueReference for v in model.modelVariables}
+        self.instance_name = instance_name
+        self.fmu = FMU2Slave(guid=model.guid, unzipDirectory=str(case.unzip_dir),
+                             modelIdentifier=model.coSimulation.modelIdentifier,
+                             instanceName=instance_name)
+        self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
+        self._freed = False
+        self.fmu.setupExperiment(startTime=start_time)
+        self.fmu.enterInitializationMode()
+        for name, value in (parameters or {}).items():
+            self.fmu.setReal([self.vr[name]], [float(value)])
+        self.fmu.exitInitializationMode()
+        self._real_refs = [self.vr[n] for n in REAL_OUTPUTS]
+
+    def set_inputs(self, tau_1: float, tau_2: float) -> None:
+        self.fmu.setReal([self.vr["tau_1"], self.vr["tau_2"]], [tau_1, tau_2])
+
+    def step(self, t: float, h: float) -> None:
+        # noSetFMUStatePriorToCurrentPoint = False: the tests do roll back.
+        self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h,
+                        noSetFMUStatePriorToCurrentPoint=False)
+
+    def outputs(self) -> tuple:
+        """All real outputs plus contact_pairs, exactly as the FMU returns them."""
+        return tuple(self.fmu.getReal(self._real_refs)) + tuple(self.fmu.getInteger([self.vr["contact_pairs"]]))
+
+    def free(self) -> None:
+        if not self._freed:
+            self._freed = True
+            self.fmu.freeInstance()
+
+
+@pytest.fixture
+def make_slave():
+    """Factory: make_slave(case, name, **kw) -> GearSlave; all are freed at teardown."""
+    slaves = []
+
+    def factory(case: GearCase, instance_name: str, **kwargs) -> GearSlave:
+        slave = GearSlave(case, instance_name, **kwargs)
+        slaves.append(slave)
+        return slave
+
+    yield factory
+    for slave in reversed(slaves):
+        slave.free()
+
+
+def drive_schedule(n_steps: int, seed: float = 0.0, t0: float = 0.0):
+    """A deterministic, non-trivial input schedule with varying step sizes:
+    yields (t, h, tau_1, tau_2) for n_steps communication steps starting at t0."""
+    steps = (1e-4, 3e-5, 2e-4, 7e-5)
+    t = t0
+    for n in range(n_steps):
+        h = steps[n % len(steps)]
+        tau_1 = 120.0 + 40.0 * math.sin(0.37 * n + seed)
+        tau_2 = -150.0 + 25.0 * math.cos(0.21 * n + 2.0 * seed)
+        yield t, h, tau_1, tau_2
+        t += h
+
+
+@pytest.fixture(scope="session")
+def schedule():
+    return drive_schedule
