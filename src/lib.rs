@@ -1,7 +1,14 @@
 //! gearfmu: FE-grade gear-pair dynamics as an FMI 2.0 Co-Simulation FMU.
 //!
-//! Offline (fmu-build): `gear` → stiffness/ROM → `model_data` file. Online (the FMU): `fmi2`
-//! (generic FMI layer) drives `dynamics` through the model data. See `../shared/design.md`.
+//! Offline (fmu-build): `gear` (spec, geometry) → `dynamics` (mesh stiffness, models) →
+//! `model_file` (the only thing that crosses). Online (the FMU): `fmi2`, the generic FMI layer,
+//! drives `dynamics::fmu` through the model file. See `../shared/design.md`.
 
 pub mod dynamics;
+pub mod fmi2;
 pub mod gear;
+pub mod interface;
+pub mod model_file;
+
+/// The model the exported fmi2 functions drive.
+pub type FmuModel = dynamics::fmu::GearPairFmu;

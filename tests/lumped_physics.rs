@@ -7,9 +7,7 @@ use gearfmu::gear::{GearPair, PairSpec};
 use std::path::Path;
 
 fn pair(name: &str) -> GearPair {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(name);
     GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap()
 }
 
@@ -18,9 +16,8 @@ fn print_figures() {
     for name in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
         let p = pair(name);
         let mesh = LumpedMesh::from_pair(&p);
-        let model = LumpedModel::with_defaults(mesh.clone());
-        let iso =
-            iso6336::to_newton_per_metre(iso6336::mesh_stiffness_c_gamma_alpha(&p), p.face_width_m);
+        let model = LumpedModel::with_defaults(&mesh);
+        let iso = iso6336::to_newton_per_metre(iso6336::mesh_stiffness_c_gamma_alpha(&p), p.face_width_m);
         println!(
             "{name}: eps_a {:.4} eps_b {:.4} pb {:.4} mm  J1 {:.5} J2 {:.5} kmean {:.4e} iso {:.4e} ratio {:.3} fn {:.1} Hz backlash {:.1} um  min/max k {:.3e} {:.3e}",
             p.transverse_contact_ratio, p.overlap_ratio, p.base_pitch_m*1e3, p.gear1.inertia_kgm2, p.gear2.inertia_kgm2,

@@ -10,13 +10,10 @@ pub fn theoretical_single_stiffness(pair: &GearPair) -> f64 {
     let zn1 = pair.gear1.teeth as f64 / cos3;
     let zn2 = pair.gear2.teeth as f64 / cos3;
     let (x1, x2) = (pair.gear1.profile_shift, pair.gear2.profile_shift);
-    let q = 0.04723 + 0.15551 / zn1 + 0.25791 / zn2
-        - 0.00635 * x1
-        - 0.11654 * x1 / zn1
-        - 0.00193 * x2
-        - 0.24188 * x2 / zn2
-        + 0.00529 * x1 * x1
-        + 0.00182 * x2 * x2;
+    let q =
+        0.04723 + 0.15551 / zn1 + 0.25791 / zn2 - 0.00635 * x1 - 0.11654 * x1 / zn1 - 0.00193 * x2 - 0.24188 * x2 / zn2
+            + 0.00529 * x1 * x1
+            + 0.00182 * x2 * x2;
     1.0 / q
 }
 

@@ -43,11 +43,8 @@ pub const AXIAL_SLICES: usize = 40;
 impl LumpedMesh {
     /// Builds the lumped mesh from the geometry (potential-energy stiffness; offline).
     pub fn from_pair(pair: &GearPair) -> LumpedMesh {
-        let MeshStiffnessTable {
-            stiffness_n_per_m,
-            pairs_in_contact,
-            ..
-        } = mesh_stiffness_table(pair, TABLE_SAMPLES, AXIAL_SLICES);
+        let MeshStiffnessTable { stiffness_n_per_m, pairs_in_contact, .. } =
+            mesh_stiffness_table(pair, TABLE_SAMPLES, AXIAL_SLICES);
         let n = stiffness_n_per_m.len();
         let roll_offset = pair.pitch_point_m() - pair.path_start_m;
         // Coast flank: the mirror image of the drive flank about the reference position (symmetric
@@ -89,20 +86,17 @@ pub struct LumpedParameters {
 
 /// Equivalent mass of the mesh mode along the LOA: 1/m_e = r_b1²/J₁ + r_b2²/J₂.
 pub fn equivalent_mesh_mass(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
-    1.0 / (mesh.base_radius_1_m.powi(2) / p.inertia_1_kgm2
-        + mesh.base_radius_2_m.powi(2) / p.inertia_2_kgm2)
+    1.0 / (mesh.base_radius_1_m.powi(2) / p.inertia_1_kgm2 + mesh.base_radius_2_m.powi(2) / p.inertia_2_kgm2)
 }
 
 /// Natural frequency (Hz) of the mesh mode from the mean drive stiffness: √(k̄/m_e)/2π.
 pub fn mesh_natural_frequency_hz(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
-    (mesh.mean_drive_stiffness() / equivalent_mesh_mass(mesh, p)).sqrt()
-        / (2.0 * std::f64::consts::PI)
+    (mesh.mean_drive_stiffness() / equivalent_mesh_mass(mesh, p)).sqrt() / (2.0 * std::f64::consts::PI)
 }
 
 /// Mesh damping coefficient c = 2ζ√(k̄·m_e) (N·s/m).
 pub fn mesh_damping_coefficient(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
-    2.0 * p.mesh_damping_ratio
-        * (mesh.mean_drive_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
+    2.0 * p.mesh_damping_ratio * (mesh.mean_drive_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
 }
 
 /// The state of the two rigid gears, plus the work integrals that the energy balance needs.
@@ -153,44 +147,44 @@ fn nearest(table: &[u32], pitch: f64, xi: f64) -> u32 {
     table[i]
 }
 
-/// The lumped model at run time: mesh data plus parameters, with the damping precomputed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LumpedModel {
-    pub mesh: LumpedMesh,
+impl LumpedParameters {
+    /// The defaults carried by the mesh data (inertias from geometry, damping from the spec).
+    pub fn defaults(mesh: &LumpedMesh) -> Self {
+        LumpedParameters {
+            inertia_1_kgm2: mesh.inertia_1_kgm2,
+            inertia_2_kgm2: mesh.inertia_2_kgm2,
+            mesh_damping_ratio: mesh.mesh_damping_ratio,
+        }
+    }
+}
+
+/// The lumped model at run time: a view of the mesh data with the instance's parameters and
+/// the damping coefficient they imply. Building one costs nothing (the tables are borrowed).
+#[derive(Debug, Clone, Copy)]
+pub struct LumpedModel<'a> {
+    pub mesh: &'a LumpedMesh,
     pub params: LumpedParameters,
     pub damping_n_s_per_m: f64,
 }
 
-impl LumpedModel {
-    pub fn new(mesh: LumpedMesh, params: LumpedParameters) -> Self {
-        let damping = mesh_damping_coefficient(&mesh, &params);
-        LumpedModel {
-            mesh,
-            params,
-            damping_n_s_per_m: damping,
-        }
+impl<'a> LumpedModel<'a> {
+    pub fn new(mesh: &'a LumpedMesh, params: LumpedParameters) -> Self {
+        let damping = mesh_damping_coefficient(mesh, &params);
+        LumpedModel { mesh, params, damping_n_s_per_m: damping }
     }
 
-    pub fn with_defaults(mesh: LumpedMesh) -> Self {
-        let params = LumpedParameters {
-            inertia_1_kgm2: mesh.inertia_1_kgm2,
-            inertia_2_kgm2: mesh.inertia_2_kgm2,
-            mesh_damping_ratio: mesh.mesh_damping_ratio,
-        };
-        Self::new(mesh, params)
+    pub fn with_defaults(mesh: &'a LumpedMesh) -> Self {
+        Self::new(mesh, LumpedParameters::defaults(mesh))
     }
 
     /// The mesh force law at a state (see the module comment).
     pub fn mesh_state(&self, s: &LumpedState) -> MeshState {
-        let m = &self.mesh;
+        let m = self.mesh;
         let delta = m.base_radius_1_m * s.theta_1 - m.base_radius_2_m * s.theta_2;
         let delta_dot = m.base_radius_1_m * s.omega_1 - m.base_radius_2_m * s.omega_2;
         let xi = m.base_radius_1_m * s.theta_1 + m.roll_offset_m;
         let c = self.damping_n_s_per_m;
-        let mut out = MeshState {
-            transmission_error_m: delta,
-            ..Default::default()
-        };
+        let mut out = MeshState { transmission_error_m: delta, ..Default::default() };
         if delta > 0.0 {
             let (k, dk) = interpolate(&m.drive_stiffness_n_per_m, m.base_pitch_m, xi);
             out.elastic_force_n = k * delta;
@@ -214,11 +208,10 @@ impl LumpedModel {
 
     /// Time derivative of the state under shaft torques τ₁, τ₂ (N·m).
     pub fn derivative(&self, s: &LumpedState, torques: [f64; 2]) -> LumpedState {
-        let m = &self.mesh;
+        let m = self.mesh;
         let mesh = self.mesh_state(s);
         let delta_dot = m.base_radius_1_m * s.omega_1 - m.base_radius_2_m * s.omega_2;
-        let torque_1 =
-            torques[0] - m.base_radius_1_m * mesh.force_n + m.base_radius_1_m * mesh.roll_force_n;
+        let torque_1 = torques[0] - m.base_radius_1_m * mesh.force_n + m.base_radius_1_m * mesh.roll_force_n;
         let torque_2 = torques[1] + m.base_radius_2_m * mesh.force_n;
         LumpedState {
             theta_1: s.omega_1,
@@ -232,8 +225,7 @@ impl LumpedModel {
 
     /// Kinetic energy of both gears (J).
     pub fn kinetic_energy(&self, s: &LumpedState) -> f64 {
-        0.5 * self.params.inertia_1_kgm2 * s.omega_1.powi(2)
-            + 0.5 * self.params.inertia_2_kgm2 * s.omega_2.powi(2)
+        0.5 * self.params.inertia_1_kgm2 * s.omega_1.powi(2) + 0.5 * self.params.inertia_2_kgm2 * s.omega_2.powi(2)
     }
 
     /// One classical Runge–Kutta step of length h with the torques held.
@@ -247,14 +239,8 @@ impl LumpedModel {
             omega_1: k1.omega_1 + 2.0 * k2.omega_1 + 2.0 * k3.omega_1 + k4.omega_1,
             theta_2: k1.theta_2 + 2.0 * k2.theta_2 + 2.0 * k3.theta_2 + k4.theta_2,
             omega_2: k1.omega_2 + 2.0 * k2.omega_2 + 2.0 * k3.omega_2 + k4.omega_2,
-            input_work_j: k1.input_work_j
-                + 2.0 * k2.input_work_j
-                + 2.0 * k3.input_work_j
-                + k4.input_work_j,
-            dissipated_j: k1.dissipated_j
-                + 2.0 * k2.dissipated_j
-                + 2.0 * k3.dissipated_j
-                + k4.dissipated_j,
+            input_work_j: k1.input_work_j + 2.0 * k2.input_work_j + 2.0 * k3.input_work_j + k4.input_work_j,
+            dissipated_j: k1.dissipated_j + 2.0 * k2.dissipated_j + 2.0 * k3.dissipated_j + k4.dissipated_j,
         };
         axpy(s, h / 6.0, &sum)
     }

@@ -24,17 +24,10 @@ use crate::gear::{Gear, GearPair};
 const SAINSOT_L: [f64; 6] = [-5.574e-5, -1.9986e-3, -2.3015e-4, 4.7702e-3, 0.0271, 6.8045];
 const SAINSOT_M: [f64; 6] = [60.111e-5, 28.100e-3, -83.431e-4, -9.9256e-3, 0.1624, 0.9086];
 const SAINSOT_P: [f64; 6] = [-50.952e-5, 185.50e-3, 0.0538e-4, 53.300e-3, 0.2895, 0.9236];
-const SAINSOT_Q: [f64; 6] = [
-    -6.2042e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904,
-];
+const SAINSOT_Q: [f64; 6] = [-6.2042e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904];
 
 fn sainsot(c: &[f64; 6], h_f: f64, theta_f: f64) -> f64 {
-    c[0] / theta_f.powi(2)
-        + c[1] * h_f.powi(2)
-        + c[2] * h_f / theta_f
-        + c[3] / theta_f
-        + c[4] * h_f
-        + c[5]
+    c[0] / theta_f.powi(2) + c[1] * h_f.powi(2) + c[2] * h_f / theta_f + c[3] / theta_f + c[4] * h_f + c[5]
 }
 
 /// Compliance (per unit face width) of one tooth loaded on its involute at `contact_radius_m`
@@ -100,8 +93,7 @@ pub fn tooth_compliance_per_width(
     let foundation = cos_a * cos_a / e
         * (sainsot(&SAINSOT_L, h_f, theta_f) * ratio * ratio
             + sainsot(&SAINSOT_M, h_f, theta_f) * ratio
-            + sainsot(&SAINSOT_P, h_f, theta_f)
-                * (1.0 + sainsot(&SAINSOT_Q, h_f, theta_f) * alpha_1.tan().powi(2)));
+            + sainsot(&SAINSOT_P, h_f, theta_f) * (1.0 + sainsot(&SAINSOT_Q, h_f, theta_f) * alpha_1.tan().powi(2)));
 
     bending + shear + axial + foundation
 }
@@ -131,19 +123,11 @@ pub struct MeshStiffnessTable {
     pub pairs_in_contact: Vec<u32>,
 }
 
-pub fn mesh_stiffness_table(
-    pair: &GearPair,
-    samples: usize,
-    axial_slices: usize,
-) -> MeshStiffnessTable {
+pub fn mesh_stiffness_table(pair: &GearPair, samples: usize, axial_slices: usize) -> MeshStiffnessTable {
     let pb = pair.base_pitch_m;
     let b = pair.face_width_m;
     let tan_bb = pair.base_helix_angle_rad.tan();
-    let slices = if pair.helix_angle_rad == 0.0 {
-        1
-    } else {
-        axial_slices.max(1)
-    };
+    let slices = if pair.helix_angle_rad == 0.0 { 1 } else { axial_slices.max(1) };
     let dz = b / slices as f64;
     // Transverse stiffness of a slice: line length dz/cos β_b, normal approach δ_t·cos β_b,
     // and the transverse component of the normal force → factor cos β_b on k·dz.
@@ -153,9 +137,7 @@ pub fn mesh_stiffness_table(
     // The pair stiffness is smooth along the path: tabulate it once, interpolate per slice.
     const PATH_SAMPLES: usize = 400;
     let du = (u_e - u_a) / (PATH_SAMPLES - 1) as f64;
-    let along_path: Vec<f64> = (0..PATH_SAMPLES)
-        .map(|i| pair_stiffness_per_width(pair, u_a + du * i as f64))
-        .collect();
+    let along_path: Vec<f64> = (0..PATH_SAMPLES).map(|i| pair_stiffness_per_width(pair, u_a + du * i as f64)).collect();
     let k_at = |u: f64| {
         let pos = ((u - u_a) / du).clamp(0.0, (PATH_SAMPLES - 1) as f64);
         let i = (pos.floor() as usize).min(PATH_SAMPLES - 2);
@@ -185,9 +167,5 @@ pub fn mesh_stiffness_table(
         stiffness.push(k);
         pairs.push(n_pairs);
     }
-    MeshStiffnessTable {
-        roll_m: roll,
-        stiffness_n_per_m: stiffness,
-        pairs_in_contact: pairs,
-    }
+    MeshStiffnessTable { roll_m: roll, stiffness_n_per_m: stiffness, pairs_in_contact: pairs }
 }

@@ -1,6 +1,7 @@
-//! Gear-pair dynamics. Each fidelity level is a model behind [`GearPairModel`]; the FMU glue
-//! (`dynamics::fmu`) drives whichever the FMU's resources name.
+//! Gear-pair dynamics: the fidelity levels (today the lumped model; the FE-based PMOR-Hertz
+//! model joins as another `model_file::ModelKind`) and the FMU glue (`fmu`) that drives them.
 
+pub mod fmu;
 pub mod iso6336;
 pub mod lumped;
 pub mod mesh_stiffness;

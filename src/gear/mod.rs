@@ -42,17 +42,10 @@ impl Gear {
 
     /// Half tooth-thickness angle of the real profile at radius r: the generated fillet from the
     /// root circle up to where it meets the involute, the involute above.
-    pub fn profile_half_thickness_angle(
-        &self,
-        radius_m: f64,
-        transverse_pressure_angle: f64,
-    ) -> f64 {
+    pub fn profile_half_thickness_angle(&self, radius_m: f64, transverse_pressure_angle: f64) -> f64 {
         match self.fillet.last() {
             Some(&(r_join, _)) if radius_m < r_join => {
-                let i = self
-                    .fillet
-                    .partition_point(|&(r, _)| r < radius_m)
-                    .clamp(1, self.fillet.len() - 1);
+                let i = self.fillet.partition_point(|&(r, _)| r < radius_m).clamp(1, self.fillet.len() - 1);
                 let ((r0, a0), (r1, a1)) = (self.fillet[i - 1], self.fillet[i]);
                 a0 + (a1 - a0) * (radius_m - r0) / (r1 - r0)
             }
@@ -120,10 +113,7 @@ impl GearPair {
     /// Radius on gear 1 and on gear 2 of the contact point at u (from T₁).
     pub fn contact_radii(&self, u_m: f64) -> (f64, f64) {
         let (rho1, rho2) = self.radii_of_curvature(u_m);
-        (
-            self.gear1.base_radius_m.hypot(rho1),
-            self.gear2.base_radius_m.hypot(rho2),
-        )
+        (self.gear1.base_radius_m.hypot(rho1), self.gear2.base_radius_m.hypot(rho2))
     }
 
     pub fn from_spec(spec: &PairSpec) -> Result<GearPair, SpecError> {
@@ -135,10 +125,7 @@ fn positive(field: &str, value: f64) -> Result<f64, SpecError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(invalid(
-            field,
-            format!("must be a positive finite number, got {value}"),
-        ))
+        Err(invalid(field, format!("must be a positive finite number, got {value}")))
     }
 }
 
@@ -170,10 +157,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let rho = positive("material.density_kg_m3", mat.density_kg_m3)?;
     let b = positive("mounting.face_width_mm", spec.mounting.face_width_mm)? * 1e-3;
     if !(spec.mounting.backlash_mm.is_finite() && spec.mounting.backlash_mm >= 0.0) {
-        return Err(invalid(
-            "mounting.backlash_mm",
-            "must be a finite number ≥ 0",
-        ));
+        return Err(invalid("mounting.backlash_mm", "must be a finite number ≥ 0"));
     }
     let zeta = spec.mounting.mesh_damping_ratio;
     if !(zeta.is_finite() && (0.0..1.0).contains(&zeta)) {
@@ -188,18 +172,12 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
 
     let gear = |which: &str, g: &spec::GearSpec| -> Result<Gear, SpecError> {
         if g.teeth <= 0 {
-            return Err(invalid(
-                &format!("{which}.teeth"),
-                "must be a positive integer",
-            ));
+            return Err(invalid(&format!("{which}.teeth"), "must be a positive integer"));
         }
         let z = g.teeth as f64;
         let x = g.profile_shift;
         if !x.is_finite() || x.abs() > 1.5 {
-            return Err(invalid(
-                &format!("{which}.profile_shift"),
-                "must be in [-1.5, 1.5]",
-            ));
+            return Err(invalid(&format!("{which}.profile_shift"), "must be in [-1.5, 1.5]"));
         }
         let r = z * mt / 2.0;
         let rb = r * alpha_t.cos();
@@ -226,24 +204,17 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         if bore >= rf - mn {
             return Err(invalid(
                 &format!("{which}.bore_radius_mm"),
-                format!(
-                    "must leave a rim of at least one module below the root circle ({:.2} mm)",
-                    rf * 1e3
-                ),
+                format!("must leave a rim of at least one module below the root circle ({:.2} mm)", rf * 1e3),
             ));
         }
         let psi_p = (PI / 2.0 + 2.0 * x * alpha_n.tan()) / z;
         let half_tip = psi_p + inv(alpha_t) - inv((rb / ra).acos());
         if half_tip <= 0.0 {
-            return Err(invalid(
-                &format!("{which}.profile_shift"),
-                "the tooth comes to a point below the tip circle",
-            ));
+            return Err(invalid(&format!("{which}.profile_shift"), "the tooth comes to a point below the tip circle"));
         }
         // Mass: rim/web as a full annulus bore..root, the tooth ring root..tip about half filled
         // (the FE mesh of a later issue gives the exact figure). Overridable in the spec.
-        let inertia_geom =
-            rho * b * PI / 2.0 * ((rf.powi(4) - bore.powi(4)) + 0.5 * (ra.powi(4) - rf.powi(4)));
+        let inertia_geom = rho * b * PI / 2.0 * ((rf.powi(4) - bore.powi(4)) + 0.5 * (ra.powi(4) - rf.powi(4)));
         let inertia = match g.inertia_kgm2 {
             Some(j) => positive(&format!("{which}.inertia_kgm2"), j)?,
             None => inertia_geom,
@@ -277,8 +248,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
 
     // Operating center distance and pressure angle.
     let (z1, z2) = (g1.teeth as f64, g2.teeth as f64);
-    let inv_w0 =
-        inv(alpha_t) + 2.0 * alpha_n.tan() * (g1.profile_shift + g2.profile_shift) / (z1 + z2);
+    let inv_w0 = inv(alpha_t) + 2.0 * alpha_n.tan() * (g1.profile_shift + g2.profile_shift) / (z1 + z2);
     let alpha_w0 = inv_inverse(inv_w0);
     let a0 = (g1.base_radius_m + g2.base_radius_m) / alpha_w0.cos();
     let a = match spec.mounting.center_distance_mm {
@@ -287,10 +257,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     };
     let cos_w = (g1.base_radius_m + g2.base_radius_m) / a;
     if cos_w >= 1.0 {
-        return Err(invalid(
-            "mounting.center_distance_mm",
-            "is not larger than the sum of the base radii",
-        ));
+        return Err(invalid("mounting.center_distance_mm", "is not larger than the sum of the base radii"));
     }
     let alpha_w = cos_w.acos();
     // Backlash the center distance makes: operating circular pitch minus both tooth thicknesses
@@ -317,12 +284,8 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let path_end = (g1.tip_radius_m.powi(2) - g1.base_radius_m.powi(2)).sqrt();
     // Tip interference: each tip must meet the mate's involute, not its fillet or the region
     // inside its base circle.
-    let u_form1 = (g1.form_radius_m.powi(2) - g1.base_radius_m.powi(2))
-        .max(0.0)
-        .sqrt();
-    let u_form2 = (g2.form_radius_m.powi(2) - g2.base_radius_m.powi(2))
-        .max(0.0)
-        .sqrt();
+    let u_form1 = (g1.form_radius_m.powi(2) - g1.base_radius_m.powi(2)).max(0.0).sqrt();
+    let u_form2 = (g2.form_radius_m.powi(2) - g2.base_radius_m.powi(2)).max(0.0).sqrt();
     if path_start < u_form1 - 1e-12 {
         return Err(invalid(
             "gear2.teeth",
@@ -340,9 +303,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     if eps_alpha < 1.0 {
         return Err(invalid(
             "mounting.center_distance_mm",
-            format!(
-                "transverse contact ratio ε_α = {eps_alpha:.3} < 1: the mesh is not continuous"
-            ),
+            format!("transverse contact ratio ε_α = {eps_alpha:.3} < 1: the mesh is not continuous"),
         ));
     }
     Ok(GearPair {

@@ -10,10 +10,7 @@ use std::path::Path;
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
     #[error("cannot read spec file {path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    Io { path: String, source: std::io::Error },
     #[error("spec is not valid TOML or has an unknown/missing key: {0}")]
     Parse(String),
     #[error("field `{field}`: {rule}")]
@@ -21,10 +18,7 @@ pub enum SpecError {
 }
 
 pub(crate) fn invalid(field: &str, rule: impl Into<String>) -> SpecError {
-    SpecError::Invalid {
-        field: field.to_string(),
-        rule: rule.into(),
-    }
+    SpecError::Invalid { field: field.to_string(), rule: rule.into() }
 }
 
 /// Hand of helix; irrelevant for spur gears (helix angle 0).
@@ -124,10 +118,8 @@ impl PairSpec {
     }
 
     pub fn load(path: &Path) -> Result<Self, SpecError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SpecError::Io { path: path.display().to_string(), source })?;
         Self::from_toml(&text)
     }
 }

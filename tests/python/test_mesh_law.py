@@ -216,7 +216,8 @@ def test_undamped_fmu_conserves_energy(gear_case, make_slave, drivetrain, scenar
     print(f"{gear_case.name}/{scenario}: energy drift FMU {drift_fmu:.3e} J, "
           f"Python RK4 {drift_py:.3e} J, potential scale {scale:.3e} J")
     # RK4 at 8 sub-steps per 61 µs drifts a little (kinks of the tables, contact
-    # switching); the FMU may not drift more than the same algorithm in Python,
+    # switching, ~0.5 % of the potential on a steep hand-made table); the FMU may
+    # not drift more than the same algorithm in Python,
     # and the drift must be small against the mesh potential energy.
     assert drift_fmu <= 2.0 * drift_py + 1e-9 * scale
-    assert drift_fmu < 1e-2 * scale
+    assert drift_fmu < 5e-2 * scale   # dropping the G term gives tens of %

@@ -1,0 +1,123 @@
+//! modelDescription.xml, written from the interface table (modelDescription/variables.toml).
+//! Written by hand rather than by a schema crate so that no empty `<Derivatives/>` or
+//! `<InitialUnknowns/>` element appears (fmpy's validator rejects them).
+
+use gearfmu::interface::{Start, Variable};
+use std::fmt::Write;
+
+/// Per-FMU facts that the interface table leaves to the model.
+pub struct ModelFacts<'a> {
+    pub model_name: &'a str,
+    pub guid: &'a str,
+    pub description: &'a str,
+    /// Start values for variables whose start is "model".
+    pub model_starts: &'a [(&'a str, f64)],
+}
+
+pub const MODEL_IDENTIFIER: &str = "gearfmu";
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// SI base-unit exponents of each unit used in the interface.
+fn base_units(unit: &str) -> &'static str {
+    match unit {
+        "N.m" => r#"kg="1" m="2" s="-2""#,
+        "N" => r#"kg="1" m="1" s="-2""#,
+        "N/m" => r#"kg="1" s="-2""#,
+        "m" => r#"m="1""#,
+        "s" => r#"s="1""#,
+        "rad" => r#"rad="1""#,
+        "rad/s" => r#"rad="1" s="-1""#,
+        "kg.m2" => r#"kg="1" m="2""#,
+        _ => "",
+    }
+}
+
+pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, String> {
+    let mut x = String::new();
+    let w = &mut x;
+    writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#).unwrap();
+    writeln!(
+        w,
+        r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{}" description="{}" generationTool="gearfmu fmu-build {}" variableNamingConvention="flat" numberOfEventIndicators="0">"#,
+        escape(facts.model_name),
+        facts.guid,
+        escape(facts.description),
+        env!("CARGO_PKG_VERSION")
+    )
+    .unwrap();
+    writeln!(
+        w,
+        r#"  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" canNotUseMemoryManagementFunctions="true" canInterpolateInputs="false" maxOutputDerivativeOrder="0" providesDirectionalDerivative="false"/>"#
+    )
+    .unwrap();
+    let mut units: Vec<&str> = variables.iter().filter_map(|v| v.unit.as_deref()).collect();
+    units.sort();
+    units.dedup();
+    writeln!(w, "  <UnitDefinitions>").unwrap();
+    for u in &units {
+        writeln!(w, r#"    <Unit name="{u}"><BaseUnit {}/></Unit>"#, base_units(u)).unwrap();
+    }
+    writeln!(w, "  </UnitDefinitions>").unwrap();
+    writeln!(w, "  <LogCategories>").unwrap();
+    for c in gearfmu::fmi2::instance::LOG_CATEGORIES {
+        writeln!(w, r#"    <Category name="{c}"/>"#).unwrap();
+    }
+    writeln!(w, "  </LogCategories>").unwrap();
+    writeln!(w, r#"  <DefaultExperiment startTime="0" stopTime="0.025" stepSize="1e-05"/>"#).unwrap();
+    writeln!(w, "  <ModelVariables>").unwrap();
+    let mut outputs = Vec::new();
+    for (index, v) in variables.iter().enumerate() {
+        let (variability, initial) = match (v.causality.as_str(), v.kind.as_str()) {
+            ("input", _) => ("continuous", ""),
+            ("output", "Integer") => ("discrete", r#" initial="calculated""#),
+            ("output", _) => ("continuous", r#" initial="calculated""#),
+            ("parameter", _) => ("fixed", r#" initial="exact""#),
+            (c, _) => return Err(format!("variable {}: unsupported causality {c}", v.name)),
+        };
+        if v.causality == "output" {
+            outputs.push(index + 1);
+        }
+        let start = match &v.start {
+            None => String::new(),
+            Some(Start::Value(s)) => format!(r#" start="{s:?}""#),
+            Some(Start::FromModel(tag)) if tag == "model" => {
+                let value = facts
+                    .model_starts
+                    .iter()
+                    .find(|(n, _)| *n == v.name)
+                    .ok_or_else(|| format!("variable {}: start = \"model\" but the model gives none", v.name))?
+                    .1;
+                format!(r#" start="{value:?}""#)
+            }
+            Some(Start::FromModel(other)) => {
+                return Err(format!("variable {}: start = \"{other}\" is not a number or \"model\"", v.name))
+            }
+        };
+        let unit = v.unit.as_deref().map(|u| format!(r#" unit="{u}""#)).unwrap_or_default();
+        writeln!(
+            w,
+            r#"    <ScalarVariable name="{}" valueReference="{}" causality="{}" variability="{variability}"{initial} description="{}"><{}{unit}{start}/></ScalarVariable>"#,
+            v.name,
+            v.value_reference,
+            v.causality,
+            escape(&v.description),
+            v.kind
+        )
+        .unwrap();
+    }
+    writeln!(w, "  </ModelVariables>").unwrap();
+    writeln!(w, "  <ModelStructure>").unwrap();
+    for section in ["Outputs", "InitialUnknowns"] {
+        writeln!(w, "    <{section}>").unwrap();
+        for i in &outputs {
+            writeln!(w, r#"      <Unknown index="{i}"/>"#).unwrap();
+        }
+        writeln!(w, "    </{section}>").unwrap();
+    }
+    writeln!(w, "  </ModelStructure>").unwrap();
+    writeln!(w, "</fmiModelDescription>").unwrap();
+    Ok(x)
+}

@@ -1,0 +1,45 @@
+//! The FMI 2.0 Co-Simulation layer. It knows nothing about gears: it holds the FMI state
+//! machine, checks every argument, logs through the master's callback and handles FMU states,
+//! and talks to a model only through [`Model`]. Modelled on modelica/Reference-FMUs: one generic
+//! set of entry points (`exports`), one guard with a table of allowed states (`instance`), and a
+//! small per-model implementation elsewhere (`crate::dynamics::fmu`).
+
+pub mod exports;
+pub mod instance;
+pub mod resource_uri;
+
+use serde::{de::DeserializeOwned, Serialize};
+use std::path::Path;
+
+/// The phases of an FMI 2.0 Co-Simulation slave (FMI 2.0.4, Fig. 7), one bit each so that the
+/// table of allowed phases per function is a set of masks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[repr(u32)]
+pub enum Phase {
+    Instantiated = 1 << 0,
+    InitializationMode = 1 << 1,
+    StepComplete = 1 << 2,
+    StepFailed = 1 << 3,
+    Terminated = 1 << 4,
+    Error = 1 << 5,
+    Fatal = 1 << 6,
+}
+
+/// A model behind the FMI layer. The model itself is immutable data loaded once (e.g. the ROM);
+/// everything that changes lives in `State`, a plain struct, so an FMU state is a copy of it.
+pub trait Model: Sized + Send + 'static {
+    type State: Clone + Serialize + DeserializeOwned + Send + 'static;
+
+    /// Loads the model from the FMU's resources folder; `guid` is the one the master passed.
+    fn load(resources: &Path, guid: &str) -> Result<Self, String>;
+    /// State right after instantiation (start values of parameters and inputs).
+    fn initial_state(&self) -> Self::State;
+    /// Sets a real variable; `phase` decides what may be set (parameters only before init).
+    fn set_real(&self, state: &mut Self::State, vr: u32, value: f64, phase: Phase) -> Result<(), String>;
+    fn get_real(&self, state: &Self::State, vr: u32) -> Result<f64, String>;
+    fn get_integer(&self, state: &Self::State, vr: u32) -> Result<i32, String>;
+    /// Applies the start values and computes initial outputs (fmi2ExitInitializationMode).
+    fn exit_initialization(&self, state: &mut Self::State) -> Result<(), String>;
+    /// Advances from the current time by h (> 0) with the inputs held.
+    fn do_step(&self, state: &mut Self::State, h: f64) -> Result<(), String>;
+}

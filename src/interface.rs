@@ -1,0 +1,46 @@
+//! The FMU's variables, read from `modelDescription/variables.toml` (compiled in), the one
+//! source of truth for names, value references, causalities, units and start values.
+
+use serde::Deserialize;
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Start {
+    Value(f64),
+    /// "model": taken from the pair's model data when the FMU is built.
+    FromModel(String),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Variable {
+    pub name: String,
+    pub value_reference: u32,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub causality: String,
+    #[serde(default)]
+    pub unit: Option<String>,
+    #[serde(default)]
+    pub start: Option<Start>,
+    pub description: String,
+}
+
+#[derive(Deserialize)]
+struct File {
+    variable: Vec<Variable>,
+}
+
+pub const VARIABLES_TOML: &str = include_str!("../modelDescription/variables.toml");
+
+/// All variables, in the order of the file (which is the order of modelDescription.xml).
+pub fn variables() -> Vec<Variable> {
+    let file: File =
+        toml::from_str(VARIABLES_TOML).expect("modelDescription/variables.toml is valid (checked by tests)");
+    file.variable
+}
+
+/// The value reference of a variable by name.
+pub fn value_reference(name: &str) -> Option<u32> {
+    variables().into_iter().find(|v| v.name == name).map(|v| v.value_reference)
+}
