@@ -47,8 +47,13 @@ def test_involute_geometry(gear_case):
     # The mesh law is periodic in one transverse base pitch: p_b = 2π r_b / z for both gears.
     assert mesh["base_pitch_m"] == pytest.approx(2 * math.pi * mesh["base_radius_1_m"] / z1, rel=1e-12)
     assert mesh["base_pitch_m"] == pytest.approx(2 * math.pi * mesh["base_radius_2_m"] / z2, rel=1e-12)
-    # Backlash along the line of action cannot exceed the specified (circumferential) backlash.
-    assert 0.0 < mesh["backlash_m"] <= g["backlash"] * (1 + 1e-12)
+    # The spec's backlash is the normal backlash j_bn along the line of action
+    # (spur: the dump has exactly 0.1 mm, not 0.1 mm·cos α as a circumferential
+    # value would give); the law works in the transverse plane, where
+    # j_bt = j_bn / cos β_b with sin β_b = sin β · cos α_n (ISO 21771).
+    alpha_n = math.atan(math.tan(g["alpha_t"]) * math.cos(g["beta"]))
+    cos_beta_b = math.sqrt(1.0 - (math.sin(g["beta"]) * math.cos(alpha_n)) ** 2)
+    assert mesh["backlash_m"] == pytest.approx(g["backlash"] / cos_beta_b, rel=1e-9)
 
 
 def test_inertias_between_root_and_tip_annuli(gear_case):

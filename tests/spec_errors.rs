@@ -1,0 +1,76 @@
+//! A malformed pair spec is refused with a message that names the field and the rule.
+
+use gearfmu::gear::{GearPair, PairSpec};
+
+const SPUR: &str = include_str!("../examples/kurokawa_spur.toml");
+
+fn refused(toml: &str) -> String {
+    match PairSpec::from_toml(toml).and_then(|s| GearPair::from_spec(&s)) {
+        Ok(_) => panic!("spec accepted:\n{toml}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn edit(from: &str, to: &str) -> String {
+    assert!(SPUR.contains(from), "{from} not in the example");
+    SPUR.replacen(from, to, 1)
+}
+
+#[test]
+fn the_examples_are_accepted() {
+    for text in [SPUR, include_str!("../examples/kurokawa_helical.toml")] {
+        GearPair::from_spec(&PairSpec::from_toml(text).unwrap()).unwrap();
+    }
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let e = refused(&edit("module_mm = 6.0", "module_mm = 6.0\nmodul_mm = 6.0"));
+    assert!(e.contains("unknown field `modul_mm`"), "{e}");
+}
+
+#[test]
+fn zero_or_negative_teeth() {
+    let e = refused(&edit("teeth = 21", "teeth = 0"));
+    assert!(e.contains("gear1.teeth") && e.contains("positive integer"), "{e}");
+    let e = refused(&edit("teeth = 31", "teeth = -31"));
+    assert!(e.contains("gear2.teeth") && e.contains("positive integer"), "{e}");
+}
+
+#[test]
+fn undercut_is_refused() {
+    // z = 12 at 20° without profile shift: the rack cuts below the interference point.
+    let e = refused(&edit("teeth = 21", "teeth = 12"));
+    assert!(e.contains("gear1.teeth") && e.contains("undercuts"), "{e}");
+}
+
+#[test]
+fn contact_ratio_below_one_is_refused() {
+    // Pulling the gears 5 mm apart shortens the path of contact below one base pitch.
+    let e = refused(&edit("face_width_mm = 15.0", "face_width_mm = 15.0\ncenter_distance_mm = 161.0"));
+    assert!(e.contains("mounting.center_distance_mm") && e.contains("contact ratio"), "{e}");
+}
+
+#[test]
+fn tip_interference_is_refused() {
+    // A long-addendum rack on a 21-tooth pinion meshing a 150-tooth wheel: the wheel's tip reaches
+    // below the pinion's form circle.
+    let text = edit("addendum_coefficient = 1.0", "addendum_coefficient = 1.2").replacen("teeth = 31", "teeth = 150", 1);
+    let e = refused(&text);
+    assert!(e.contains("tip interference"), "{e}");
+}
+
+#[test]
+fn center_distance_that_cannot_mesh() {
+    let e = refused(&edit("face_width_mm = 15.0", "face_width_mm = 15.0\ncenter_distance_mm = 155.0"));
+    assert!(e.contains("mounting.center_distance_mm") && e.contains("cannot mesh"), "{e}");
+    let e = refused(&edit("face_width_mm = 15.0", "face_width_mm = 15.0\ncenter_distance_mm = 140.0"));
+    assert!(e.contains("mounting.center_distance_mm"), "{e}");
+}
+
+#[test]
+fn non_physical_material_and_sizes() {
+    assert!(refused(&edit("poisson_ratio = 0.3", "poisson_ratio = 0.5")).contains("material.poisson_ratio"));
+    assert!(refused(&edit("face_width_mm = 15.0", "face_width_mm = -15.0")).contains("mounting.face_width_mm"));
+    assert!(refused(&edit("bore_radius_mm = 20.0", "bore_radius_mm = 60.0")).contains("gear1.bore_radius_mm"));
+}
