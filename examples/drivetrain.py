@@ -172,9 +172,9 @@ class MeshLaw:
         n = len(roll)
         # Segment i runs from roll[i] to roll[i+1]; the last one wraps to roll[0] + p_b.
         ends = roll[1:] + [roll[0] + self.base_pitch_m]
-        self._roll = roll
-        self._drive = drive
-        self._coast = coast
+        self.roll_m = roll
+        self.drive_stiffness_n_per_m = drive
+        self.coast_stiffness_n_per_m = coast
         self._drive_slope = [(drive[(i + 1) % n] - drive[i]) / (ends[i] - roll[i]) for i in range(n)]
         self._coast_slope = [(coast[(i + 1) % n] - coast[i]) / (ends[i] - roll[i]) for i in range(n)]
         self._segment_length_m = self.base_pitch_m / n
@@ -193,12 +193,12 @@ class MeshLaw:
         return (self.base_radius_1_m * phi_1_rad + self.roll_offset_m) % self.base_pitch_m
 
     def _segment(self, s_m: float) -> int:
-        n = len(self._roll)
+        n = len(self.roll_m)
         i = min(int(s_m / self._segment_length_m), n - 1)
         # Guard against rounding at the segment boundaries.
-        while i > 0 and s_m < self._roll[i]:
+        while i > 0 and s_m < self.roll_m[i]:
             i -= 1
-        while i < n - 1 and s_m >= self._roll[i + 1]:
+        while i < n - 1 and s_m >= self.roll_m[i + 1]:
             i += 1
         return i
 
@@ -206,9 +206,9 @@ class MeshLaw:
         """(K, K', Kc, Kc') at the roll position of gear 1."""
         s = self.roll_position_m(phi_1_rad)
         i = self._segment(s)
-        ds = s - self._roll[i]
-        k_drive = self._drive[i] + self._drive_slope[i] * ds
-        k_coast = self._coast[i] + self._coast_slope[i] * ds
+        ds = s - self.roll_m[i]
+        k_drive = self.drive_stiffness_n_per_m[i] + self._drive_slope[i] * ds
+        k_coast = self.coast_stiffness_n_per_m[i] + self._coast_slope[i] * ds
         return k_drive, self._drive_slope[i], k_coast, self._coast_slope[i]
 
     def force_n(self, phi_1, w_1, phi_2, w_2) -> tuple[float, float]:

@@ -67,7 +67,7 @@ SCENARIOS = {"loaded": (400.0, 30.0, 0.0, True), "rattle": (0.0, 30.0, 0.1, Fals
 def _initial_state(law, scenario):
     tau_1, w_1, approach, preload = SCENARIOS[scenario]
     tau_2 = -tau_1 * law.teeth_2 / law.teeth_1
-    k_mean = np.mean(law._drive)
+    k_mean = np.mean(law.drive_stiffness_n_per_m)
     delta_0 = (tau_1 / law.base_radius_1_m) / k_mean if preload else 0.0
     state = (0.0, w_1, -delta_0 / law.base_radius_2_m,
              (law.base_radius_1_m * w_1 - approach) / law.base_radius_2_m)
