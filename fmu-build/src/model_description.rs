@@ -121,3 +121,46 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
     writeln!(w, "</fmiModelDescription>").unwrap();
     Ok(x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fmi_schema::fmi2::{Causality, Fmi2ModelDescription};
+    use gearfmu::dynamics::fmu::Var;
+
+    fn xml() -> String {
+        let starts = [("inertia_1", 1.0), ("inertia_2", 2.0), ("mesh_damping_ratio", 0.05)];
+        let facts = ModelFacts { model_name: "Test", guid: "{x}", description: "d", model_starts: &starts };
+        write(&gearfmu::interface::variables(), &facts).unwrap()
+    }
+
+    /// The value references the FMU binary answers to (its name → physics map, built from
+    /// variables.toml) are the ones modelDescription.xml declares, read back by an independent
+    /// parser; every variable has physics, and Outputs lists exactly the outputs.
+    #[test]
+    fn value_references_in_rust_and_xml_agree() {
+        let md: Fmi2ModelDescription = fmi_schema::deserialize(&xml()).unwrap();
+        let vars = &md.model_variables.variables;
+        assert_eq!(vars.len(), Var::ALL.len());
+        for var in Var::ALL {
+            let in_xml = vars.iter().find(|v| v.name == var.name()).unwrap_or_else(|| panic!("{} missing", var.name()));
+            assert_eq!(Some(in_xml.value_reference), gearfmu::interface::value_reference(var.name()));
+        }
+        let mut refs: Vec<_> = vars.iter().map(|v| v.value_reference).collect();
+        refs.sort();
+        refs.dedup();
+        assert_eq!(refs.len(), vars.len(), "value references are unique");
+        let outputs: Vec<usize> = md.model_structure.outputs.unknowns.iter().map(|u| u.index as usize).collect();
+        let expected: Vec<usize> =
+            vars.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i + 1).collect();
+        assert_eq!(outputs, expected);
+        assert_eq!(md.co_simulation.unwrap().model_identifier, MODEL_IDENTIFIER);
+    }
+
+    #[test]
+    fn a_model_start_without_a_value_is_an_error() {
+        let facts = ModelFacts { model_name: "T", guid: "{x}", description: "d", model_starts: &[] };
+        let e = write(&gearfmu::interface::variables(), &facts).unwrap_err();
+        assert!(e.contains("inertia_1") && e.contains("start = \"model\""), "{e}");
+    }
+}
