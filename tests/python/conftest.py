@@ -38,6 +38,12 @@ def _fmu_build(*args: str) -> subprocess.CompletedProcess:
     cargo = shutil.which("cargo")
     if cargo is None:
         pytest.fail("cargo is not on PATH; cannot build the FMUs")
+    # Build the whole workspace first: `cargo run -p fmu-build` alone would not rebuild the FMU
+    # binary (the cdylib target/release/libgearfmu.so) that fmu-build packs into the .fmu.
+    build = [cargo, "build", "--release", "-q", "--workspace"]
+    proc = subprocess.run(build, cwd=REPO_ROOT, capture_output=True, text=True)
+    if proc.returncode != 0:
+        pytest.fail(f"`{' '.join(build)}` failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
     cmd = [cargo, "run", "--release", "-q", "-p", "fmu-build", "--", *args]
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
