@@ -9,10 +9,10 @@
 use fmi_sys::fmi2::*;
 use gearfmu::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedState};
 use gearfmu::fmi2::exports::*;
+use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::interface::value_reference;
 use gearfmu::model_file::{ModelFile, ModelKind};
 use std::ffi::CString;
-use gearfmu::gear::{GearPair, PairSpec};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -54,8 +54,11 @@ fn per_do_step_through_c(pair: &GearPair, mesh: &LumpedMesh) -> f64 {
     std::fs::create_dir_all(&dir).unwrap();
     let file = ModelFile { guid: guid.clone(), pair_name: pair.name.clone(), model: kind };
     std::fs::write(dir.join(gearfmu::model_file::FILE_NAME), file.to_bytes()).unwrap();
-    let (name, guid, uri) =
-        (CString::new("bench").unwrap(), CString::new(guid).unwrap(), CString::new(format!("file://{}", dir.display())).unwrap());
+    let (name, guid, uri) = (
+        CString::new("bench").unwrap(),
+        CString::new(guid).unwrap(),
+        CString::new(format!("file://{}", dir.display())).unwrap(),
+    );
     let cb = fmi2CallbackFunctions {
         logger: None,
         allocateMemory: None,
@@ -90,7 +93,7 @@ fn main() {
     for name in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
         let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(name);
         let pair = GearPair::from_spec(&PairSpec::load(&spec).unwrap()).unwrap();
-        let mesh = LumpedMesh::from_pair(&pair);
+        let mesh = LumpedMesh::from_pair(&pair).unwrap();
         let model = LumpedModel::with_defaults(&mesh);
         let steps = 200_000;
         let h = 1e-6;
@@ -106,8 +109,11 @@ fn main() {
             black_box(s);
             lumped.push(t0.elapsed().as_secs_f64() / steps as f64);
 
-            let (rb, j) = ([mesh.base_radius_1_m, mesh.base_radius_2_m], [model.params.inertia_1_kgm2, model.params.inertia_2_kgm2]);
-            let (k_mean, c) = (mesh.mean_drive_stiffness(), model.damping_n_s_per_m);
+            let (rb, j) = (
+                [mesh.base_radius_1_m, mesh.base_radius_2_m],
+                [model.params.inertia_1_kgm2, model.params.inertia_2_kgm2],
+            );
+            let (k_mean, c) = (mesh.reference_stiffness(), model.damping_n_s_per_m);
             let mut b = [0.0; 4];
             let t0 = Instant::now();
             for k in 0..steps {
@@ -117,7 +123,12 @@ fn main() {
             base.push(t0.elapsed().as_secs_f64() / steps as f64);
         }
         let (lumped, base) = (median(lumped), median(base));
-        println!("{name}: internal RK4 step {:.1} ns; baseline (constant k̄) {:.1} ns; ratio {:.2}", lumped * 1e9, base * 1e9, lumped / base);
+        println!(
+            "{name}: internal RK4 step {:.1} ns; baseline (constant k̄) {:.1} ns; ratio {:.2}",
+            lumped * 1e9,
+            base * 1e9,
+            lumped / base
+        );
 
         println!(
             "{name}: per doStep through the C API (0.1 ms, max_step 10 µs = 10 RK4 sub-steps): {:.2} µs",

@@ -4,6 +4,7 @@
 //! `model_file` (the only thing that crosses). Online (the FMU): `fmi2`, the generic FMI layer,
 //! drives `dynamics::fmu` through the model file. See `../shared/design.md`.
 
+pub mod contact;
 pub mod dynamics;
 pub mod fmi2;
 pub mod gear;

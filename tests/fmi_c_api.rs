@@ -42,7 +42,7 @@ fn resources() -> &'static (PathBuf, String) {
         log::set_max_level(log::LevelFilter::Trace);
         let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
         let pair = GearPair::from_spec(&PairSpec::load(&spec).unwrap()).unwrap();
-        let model = ModelKind::Lumped(LumpedMesh::from_pair(&pair));
+        let model = ModelKind::Lumped(LumpedMesh::from_pair(&pair).unwrap());
         let guid = ModelFile::compute_guid(gearfmu::interface::VARIABLES_TOML, &pair.name, &model);
         let dir = std::env::temp_dir().join(format!("gearfmu-c-api-{}", std::process::id())).join("res ources");
         std::fs::create_dir_all(&dir).unwrap();
@@ -300,9 +300,13 @@ fn instantiate_refuses_a_wrong_guid_bad_uri_and_damaged_model_data() {
     let name = CString::new("uri").unwrap();
     let (g, bad_uri) = (CString::new(guid.as_str()).unwrap(), CString::new("http://example.org/resources").unwrap());
     let cb = callbacks();
-    assert!(fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0).is_null());
+    assert!(
+        fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0).is_null()
+    );
     assert_logged("uri", "fmuResourceLocation must be a local file URI");
-    assert!(fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2ModelExchange, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0).is_null());
+    assert!(
+        fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2ModelExchange, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0).is_null()
+    );
     assert_logged("uri", "supports only fmi2CoSimulation");
 
     let good = std::fs::read(dir.join(FILE_NAME)).unwrap();

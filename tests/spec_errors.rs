@@ -55,7 +55,8 @@ fn contact_ratio_below_one_is_refused() {
 fn tip_interference_is_refused() {
     // A long-addendum rack on a 21-tooth pinion meshing a 150-tooth wheel: the wheel's tip reaches
     // below the pinion's form circle.
-    let text = edit("addendum_coefficient = 1.0", "addendum_coefficient = 1.2").replacen("teeth = 31", "teeth = 150", 1);
+    let text =
+        edit("addendum_coefficient = 1.0", "addendum_coefficient = 1.2").replacen("teeth = 31", "teeth = 150", 1);
     let e = refused(&text);
     assert!(e.contains("tip interference"), "{e}");
 }

@@ -70,7 +70,7 @@ fn build(spec: &Path, output: &Path, model: ModelChoice, library: Option<PathBuf
         format!("cannot read the FMU binary {} (build it: cargo build --release -p gearfmu)", library.display())
     })?;
     let kind = match model {
-        ModelChoice::Lumped => ModelKind::Lumped(LumpedMesh::from_pair(&pair)),
+        ModelChoice::Lumped => ModelKind::Lumped(LumpedMesh::from_pair(&pair).map_err(anyhow::Error::msg)?),
     };
     let guid = ModelFile::compute_guid(interface::VARIABLES_TOML, &pair.name, &kind);
     let ModelKind::Lumped(mesh) = &kind;
@@ -114,7 +114,7 @@ fn build(spec: &Path, output: &Path, model: ModelChoice, library: Option<PathBuf
 
 fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
     let pair = load_pair(spec)?;
-    let mesh = LumpedMesh::from_pair(&pair);
+    let mesh = LumpedMesh::from_pair(&pair).map_err(anyhow::Error::msg)?;
     let params = LumpedParameters::defaults(&mesh);
     let iso = iso6336::mesh_stiffness_c_gamma_alpha(&pair);
     let iso_total = iso6336::to_newton_per_metre(iso, pair.face_width_m);
@@ -128,15 +128,23 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
     println!("  base pitch        {:.4} mm", pair.base_pitch_m * 1e3);
     println!("  contact ratios    ε_α {:.4}, ε_β {:.4}", pair.transverse_contact_ratio, pair.overlap_ratio);
     println!("  inertias          {:.5} / {:.5} kg·m²", params.inertia_1_kgm2, params.inertia_2_kgm2);
-    println!(
-        "  mean mesh stiffness {:.4e} N/m; ISO 6336-1 c_γα·b {:.4e} N/m (ratio {:.3})",
-        mesh.mean_drive_stiffness(),
-        iso_total,
-        mesh.mean_drive_stiffness() / iso_total
-    );
-    println!("  mesh natural frequency {:.1} Hz", mesh_natural_frequency_hz(&mesh, &params));
+    println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
+    for specific_load in [50.0, 100.0, 200.0, 400.0] {
+        let force = specific_load * 1e3 * pair.face_width_m;
+        let secant = mesh.drive.mean_secant_stiffness(force);
+        println!(
+            "  at {specific_load:>3} N/mm: mean secant stiffness {secant:.4e} N/m ({:.3} × ISO), mean tangent {:.4e} N/m, mesh natural frequency {:.1} Hz",
+            secant / iso_total,
+            mesh.drive.mean_tangent_stiffness(force),
+            mesh_natural_frequency_hz(&mesh, &params, force)
+        );
+    }
     if let Some(path) = json {
-        let n = mesh.drive_stiffness_n_per_m.len();
+        let k = mesh.drive.force_levels_n.len();
+        let rows = |law: &gearfmu::dynamics::mesh_law::MeshLaw| -> Vec<Vec<f64>> {
+            law.deflection_m.chunks(k).map(|r| r.to_vec()).collect()
+        };
+        let n = mesh.drive.rows();
         let value = serde_json::json!({
             "base_radius_1_m": mesh.base_radius_1_m,
             "base_radius_2_m": mesh.base_radius_2_m,
@@ -149,10 +157,12 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
             "mesh_damping_n_s_per_m": mesh_damping_coefficient(&mesh, &params),
             "roll_offset_m": mesh.roll_offset_m,
             "roll_m": (0..n).map(|i| mesh.base_pitch_m * i as f64 / n as f64).collect::<Vec<_>>(),
-            "drive_stiffness_n_per_m": mesh.drive_stiffness_n_per_m,
-            "coast_stiffness_n_per_m": mesh.coast_stiffness_n_per_m,
-            "mean_drive_stiffness_n_per_m": mesh.mean_drive_stiffness(),
-            "mesh_natural_frequency_hz": mesh_natural_frequency_hz(&mesh, &params),
+            "force_levels_n": mesh.drive.force_levels_n,
+            "drive_deflection_m": rows(&mesh.drive),
+            "coast_deflection_m": rows(&mesh.coast),
+            "reference_force_n": mesh.reference_force_n,
+            "reference_stiffness_n_per_m": mesh.reference_stiffness(),
+            "mesh_natural_frequency_hz": mesh_natural_frequency_hz(&mesh, &params, mesh.reference_force_n),
             "iso6336_c_gamma_alpha_n_per_m": iso_total,
         });
         std::fs::write(&path, serde_json::to_string_pretty(&value)?)?;

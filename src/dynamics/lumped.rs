@@ -1,15 +1,17 @@
 //! The lumped gear-pair model: two rigid gears on the line of action, coupled by a mesh whose
 //! stiffness varies with the roll position, with backlash, contact loss and back-flank contact.
 //!
-//! Mesh deflection δ = TE = r_b1·θ₁ − r_b2·θ₂ (design §3). The mesh stores the potential
-//! V(θ₁, θ₂) = ½K(ξ)·δ² on the drive flank (δ > 0) and ½K_c(ξ)·(δ + j)² on the coast flank
-//! (δ < −j), with ξ = r_b1·θ₁ + ξ₀ the roll position. Generalized forces are −∂V/∂θ, so the
-//! model conserves energy exactly: besides the mesh force F = ∂V/∂δ it carries the torque
-//! −r_b1·½K′(ξ)δ² that the varying stiffness exerts on the driver. A new tooth pair entering
-//! contact is a steep but continuous ramp of K over one table interval; its work is this torque.
-//! Damping c·δ̇ acts only while a flank is in contact, and a flank never pulls.
+//! Mesh deflection δ = TE = r_b1·θ₁ − r_b2·θ₂ (design §3), roll position ξ = r_b1·θ₁ + ξ₀.
+//! The mesh is a load-dependent force law F(δ, ξ) (`mesh_law`) on the drive flank (δ > 0) and
+//! its mirror on the coast flank (δ < −j, j the backlash); in between the flanks do not touch.
+//! The law derives from a potential V(δ, ξ) and the generalized forces are −∂V/∂θ, so the model
+//! conserves energy exactly: besides the mesh force F = ∂V/∂δ it carries the torque r_b1·(−∂V/∂ξ)
+//! that the roll-dependent stiffness exerts on the driver (−r_b1·½K′δ² for a linear law). A tooth
+//! pair entering contact is a steep but continuous change of the law over one table interval; its
+//! work is this torque. Damping c·δ̇ acts only while a flank is in contact; a flank never pulls.
 
-use super::mesh_stiffness::{mesh_stiffness_table, MeshStiffnessTable};
+use super::mesh_law::MeshLaw;
+use super::mesh_stiffness::{force_levels, static_deflection_table};
 use crate::gear::GearPair;
 use serde::{Deserialize, Serialize};
 
@@ -29,31 +31,45 @@ pub struct LumpedMesh {
     /// Roll position at θ₁ = 0: a tooth pair then touches at the pitch point (the reference mesh
     /// position where both angles are zero).
     pub roll_offset_m: f64,
-    /// Drive- and coast-flank stiffness along the LOA at ξ_i = i·p_b/N, periodic.
-    pub drive_stiffness_n_per_m: Vec<f64>,
-    pub coast_stiffness_n_per_m: Vec<f64>,
+    /// Load-dependent force laws of the drive and the coast flanks.
+    pub drive: MeshLaw,
+    pub coast: MeshLaw,
+    /// Tooth pairs in contact at ξᵢ = i·p_b/N.
     pub drive_pairs: Vec<u32>,
     pub coast_pairs: Vec<u32>,
+    /// The mesh force at which the reference stiffness (damping, natural frequency) is taken:
+    /// 200 N/mm of face width, mid-range of Kurokawa's loads and within ISO 6336-1's ≥ 100 N/mm.
+    pub reference_force_n: f64,
+    /// Mean tangent stiffness of the drive flank at the reference force (N/m), computed once
+    /// offline: damping and the predicted natural frequency use it, the step path must not
+    /// recompute it (an O(N) mean).
+    pub reference_stiffness_n_per_m: f64,
 }
 
-/// Roll-position samples per base pitch and axial slices for helical gears.
+/// Roll-position samples per base pitch, axial slices for helical gears, force levels.
 pub const TABLE_SAMPLES: usize = 1024;
 pub const AXIAL_SLICES: usize = 40;
+pub const FORCE_LEVELS: usize = 24;
 
 impl LumpedMesh {
-    /// Builds the lumped mesh from the geometry (potential-energy stiffness; offline).
-    pub fn from_pair(pair: &GearPair) -> LumpedMesh {
-        let MeshStiffnessTable { stiffness_n_per_m, pairs_in_contact, .. } =
-            mesh_stiffness_table(pair, TABLE_SAMPLES, AXIAL_SLICES);
-        let n = stiffness_n_per_m.len();
+    /// Builds the lumped mesh from the geometry (potential-energy teeth, Hertz contact; offline).
+    pub fn from_pair(pair: &GearPair) -> Result<LumpedMesh, String> {
+        let levels = force_levels(pair, FORCE_LEVELS);
+        let (drive, drive_pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
+        let n = drive.rows();
         let roll_offset = pair.pitch_point_m() - pair.path_start_m;
         // Coast flank: the mirror image of the drive flank about the reference position (symmetric
         // teeth). The phase between drive and coast contact, set by tooth thickness, is neglected.
         let offset_index = (roll_offset / pair.base_pitch_m * n as f64).round() as usize;
         let mirror = |i: usize| (2 * offset_index + 2 * n - i) % n;
-        let coast_stiffness = (0..n).map(|i| stiffness_n_per_m[mirror(i)]).collect();
-        let coast_pairs = (0..n).map(|i| pairs_in_contact[mirror(i)]).collect();
-        LumpedMesh {
+        let k = levels.len();
+        let coast_rows: Vec<f64> =
+            (0..n).flat_map(|i| drive.deflection_m[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
+        let coast = MeshLaw::new(pair.base_pitch_m, levels.clone(), coast_rows);
+        let coast_pairs = (0..n).map(|i| drive_pairs[mirror(i)]).collect();
+        let reference_force = 200.0e3 * pair.face_width_m;
+        let reference_stiffness = drive.mean_tangent_stiffness(reference_force);
+        Ok(LumpedMesh {
             teeth_1: pair.gear1.teeth,
             teeth_2: pair.gear2.teeth,
             base_radius_1_m: pair.gear1.base_radius_m,
@@ -64,15 +80,18 @@ impl LumpedMesh {
             backlash_m: pair.backlash_loa_m,
             mesh_damping_ratio: pair.mesh_damping_ratio,
             roll_offset_m: roll_offset,
-            drive_stiffness_n_per_m: stiffness_n_per_m,
-            coast_stiffness_n_per_m: coast_stiffness,
-            drive_pairs: pairs_in_contact,
+            drive,
+            coast,
+            drive_pairs,
             coast_pairs,
-        }
+            reference_force_n: reference_force,
+            reference_stiffness_n_per_m: reference_stiffness,
+        })
     }
 
-    pub fn mean_drive_stiffness(&self) -> f64 {
-        self.drive_stiffness_n_per_m.iter().sum::<f64>() / self.drive_stiffness_n_per_m.len() as f64
+    /// Mean tangent stiffness of the drive flank at the reference force (N/m).
+    pub fn reference_stiffness(&self) -> f64 {
+        self.reference_stiffness_n_per_m
     }
 }
 
@@ -89,14 +108,15 @@ pub fn equivalent_mesh_mass(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
     1.0 / (mesh.base_radius_1_m.powi(2) / p.inertia_1_kgm2 + mesh.base_radius_2_m.powi(2) / p.inertia_2_kgm2)
 }
 
-/// Natural frequency (Hz) of the mesh mode from the mean drive stiffness: √(k̄/m_e)/2π.
-pub fn mesh_natural_frequency_hz(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
-    (mesh.mean_drive_stiffness() / equivalent_mesh_mass(mesh, p)).sqrt() / (2.0 * std::f64::consts::PI)
+/// Natural frequency (Hz) of small vibrations of the mesh mode about a mean mesh force F:
+/// √(k̄_t/m_e)/2π with k̄_t the mean tangent stiffness at F.
+pub fn mesh_natural_frequency_hz(mesh: &LumpedMesh, p: &LumpedParameters, force_n: f64) -> f64 {
+    (mesh.drive.mean_tangent_stiffness(force_n) / equivalent_mesh_mass(mesh, p)).sqrt() / (2.0 * std::f64::consts::PI)
 }
 
-/// Mesh damping coefficient c = 2ζ√(k̄·m_e) (N·s/m).
+/// Mesh damping coefficient c = 2ζ√(k̄·m_e) (N·s/m), k̄ the reference stiffness.
 pub fn mesh_damping_coefficient(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
-    2.0 * p.mesh_damping_ratio * (mesh.mean_drive_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
+    2.0 * p.mesh_damping_ratio * (mesh.reference_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
 }
 
 /// The state of the two rigid gears, plus the work integrals that the energy balance needs.
@@ -128,17 +148,6 @@ pub struct MeshState {
     pub pairs_in_contact: u32,
     /// Elastic energy V (J).
     pub potential_j: f64,
-}
-
-/// Periodic piecewise-linear table: value and slope at roll ξ.
-fn interpolate(table: &[f64], pitch: f64, xi: f64) -> (f64, f64) {
-    let n = table.len();
-    let dx = pitch / n as f64;
-    let pos = xi.rem_euclid(pitch) / dx;
-    let i = (pos.floor() as usize).min(n - 1);
-    let t = pos - i as f64;
-    let (a, b) = (table[i], table[(i + 1) % n]);
-    (a + t * (b - a), (b - a) / dx)
 }
 
 fn nearest(table: &[u32], pitch: f64, xi: f64) -> u32 {
@@ -186,21 +195,21 @@ impl<'a> LumpedModel<'a> {
         let c = self.damping_n_s_per_m;
         let mut out = MeshState { transmission_error_m: delta, ..Default::default() };
         if delta > 0.0 {
-            let (k, dk) = interpolate(&m.drive_stiffness_n_per_m, m.base_pitch_m, xi);
-            out.elastic_force_n = k * delta;
-            out.force_n = (k * delta + c * delta_dot).max(0.0);
-            out.roll_force_n = -0.5 * dk * delta * delta;
-            out.stiffness_n_per_m = k;
-            out.potential_j = 0.5 * k * delta * delta;
+            let law = m.drive.evaluate(delta, xi);
+            out.elastic_force_n = law.force_n;
+            out.force_n = (law.force_n + c * delta_dot).max(0.0);
+            out.roll_force_n = law.roll_force_n;
+            out.stiffness_n_per_m = law.stiffness_n_per_m;
+            out.potential_j = law.potential_j;
             out.pairs_in_contact = nearest(&m.drive_pairs, m.base_pitch_m, xi);
         } else if delta < -m.backlash_m {
-            let d = delta + m.backlash_m;
-            let (k, dk) = interpolate(&m.coast_stiffness_n_per_m, m.base_pitch_m, xi);
-            out.elastic_force_n = k * d;
-            out.force_n = (k * d + c * delta_dot).min(0.0);
-            out.roll_force_n = -0.5 * dk * d * d;
-            out.stiffness_n_per_m = k;
-            out.potential_j = 0.5 * k * d * d;
+            // The coast law is written for a positive closure −(δ + j); its force pushes back.
+            let law = m.coast.evaluate(-(delta + m.backlash_m), xi);
+            out.elastic_force_n = -law.force_n;
+            out.force_n = (-law.force_n + c * delta_dot).min(0.0);
+            out.roll_force_n = law.roll_force_n;
+            out.stiffness_n_per_m = law.stiffness_n_per_m;
+            out.potential_j = law.potential_j;
             out.pairs_in_contact = nearest(&m.coast_pairs, m.base_pitch_m, xi);
         }
         out

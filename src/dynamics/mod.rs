@@ -4,4 +4,5 @@
 pub mod fmu;
 pub mod iso6336;
 pub mod lumped;
+pub mod mesh_law;
 pub mod mesh_stiffness;

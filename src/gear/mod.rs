@@ -11,7 +11,7 @@ pub mod spec;
 use involute::{inv, inv_inverse};
 use serde::{Deserialize, Serialize};
 use spec::invalid;
-pub use spec::{PairSpec, SpecError};
+pub use spec::{HertzContact, PairSpec, SpecError};
 use std::f64::consts::PI;
 
 /// One gear's radii and mass properties (SI).
@@ -86,6 +86,8 @@ pub struct GearPair {
     pub mesh_damping_ratio: f64,
     /// Dedendum of the basic rack over the module, h_fP/m_n (ISO 6336-1's C_B needs it).
     pub rack_dedendum_coefficient: f64,
+    /// Contact law of the lumped model.
+    pub hertz_contact: HertzContact,
 }
 
 impl GearPair {
@@ -329,5 +331,6 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         density_kg_m3: rho,
         mesh_damping_ratio: zeta,
         rack_dedendum_coefficient: hf,
+        hertz_contact: spec.lumped.hertz_contact,
     })
 }

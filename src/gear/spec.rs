@@ -84,6 +84,26 @@ pub struct MountingSpec {
     pub mesh_damping_ratio: f64,
 }
 
+/// How the lumped model treats the contact of the flanks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HertzContact {
+    /// Nonlinear Hertz line contact, Weber's approach referred to the tooth half-thickness:
+    /// the mesh stiffness grows with load.
+    #[default]
+    Weber,
+    /// Yang & Lin's linearized contact stiffness πEL/(4(1−ν²)): load-independent.
+    Linearized,
+}
+
+/// Options of the lumped model.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LumpedSpec {
+    #[serde(default)]
+    pub hertz_contact: HertzContact,
+}
+
 /// The whole pair spec as written in the TOML file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -94,6 +114,8 @@ pub struct PairSpec {
     pub mounting: MountingSpec,
     pub gear1: GearSpec,
     pub gear2: GearSpec,
+    #[serde(default)]
+    pub lumped: LumpedSpec,
 }
 
 fn one() -> f64 {

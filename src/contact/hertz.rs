@@ -1,0 +1,199 @@
+//! Hertz line contact of two elastic cylinders: contact half-width, the load–approach relation
+//! and its inverse.
+//!
+//! The approach of two bodies pressed together along a line is not defined by Hertz theory alone
+//! (a 2-D half-space has no finite displacement): it must be referred to a depth inside each
+//! body. We use Weber's form, per body i, referred to the depth hᵢ (design §4.3):
+//!
+//!   δᵢ = 2P(1−νᵢ²)/(π l Eᵢ) · [ln(2hᵢ/b) − νᵢ/(2(1−νᵢ))],   b = √(4PR/(π l E*)),
+//!
+//! with P the normal force, l the contact length, 1/R = 1/R₁ + 1/R₂ and
+//! 1/E* = (1−ν₁²)/E₁ + (1−ν₂²)/E₂. Every logarithm has a dimensionless argument (2h/b), so the
+//! value is the same in any unit system — unlike the paper's Eq. 20, whose logarithm carries a
+//! length. The relation is monotone while b stays below about hᵢ (∂δ/∂P > 0); [`LineContact::force`]
+//! refuses approaches beyond that range instead of returning a wrong branch.
+
+use std::f64::consts::PI;
+
+/// One body of the contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    pub youngs_modulus_pa: f64,
+    pub poisson_ratio: f64,
+    /// Radius of curvature of the surface at the contact line (normal plane).
+    pub radius_of_curvature_m: f64,
+    /// Depth inside the body to which the approach is referred.
+    pub reference_depth_m: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineContact {
+    pub length_m: f64,
+    pub bodies: [Body; 2],
+}
+
+impl LineContact {
+    /// E* with 1/E* = Σ (1−νᵢ²)/Eᵢ.
+    pub fn effective_modulus(&self) -> f64 {
+        1.0 / self.bodies.iter().map(|b| (1.0 - b.poisson_ratio.powi(2)) / b.youngs_modulus_pa).sum::<f64>()
+    }
+
+    /// R with 1/R = Σ 1/Rᵢ.
+    pub fn effective_radius(&self) -> f64 {
+        1.0 / self.bodies.iter().map(|b| 1.0 / b.radius_of_curvature_m).sum::<f64>()
+    }
+
+    /// Half-width b of the contact band under force P.
+    pub fn half_width(&self, force_n: f64) -> f64 {
+        (4.0 * force_n * self.effective_radius() / (PI * self.length_m * self.effective_modulus())).sqrt()
+    }
+
+    /// Peak Hertz pressure p₀ = 2P/(π b l).
+    pub fn peak_pressure(&self, force_n: f64) -> f64 {
+        2.0 * force_n / (PI * self.half_width(force_n) * self.length_m)
+    }
+
+    /// Approach δ(P) of the two reference depths (Weber's form; zero at zero force).
+    pub fn hertz_approach(&self, force_n: f64) -> f64 {
+        if force_n <= 0.0 {
+            return 0.0;
+        }
+        let b = self.half_width(force_n);
+        self.bodies
+            .iter()
+            .map(|body| {
+                let nu = body.poisson_ratio;
+                2.0 * force_n * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa)
+                    * ((2.0 * body.reference_depth_m / b).ln() - nu / (2.0 * (1.0 - nu)))
+            })
+            .sum()
+    }
+
+    /// dδ/dP (the contact compliance); infinite at P → 0 (the logarithmic singularity of line
+    /// contact), and ≤ 0 beyond the range where the relation is valid.
+    pub fn compliance(&self, force_n: f64) -> f64 {
+        let b = self.half_width(force_n);
+        self.bodies
+            .iter()
+            .map(|body| {
+                let nu = body.poisson_ratio;
+                2.0 * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa)
+                    * ((2.0 * body.reference_depth_m / b).ln() - nu / (2.0 * (1.0 - nu)) - 0.5)
+            })
+            .sum()
+    }
+
+    /// The largest force for which δ(P) is still increasing. With b = β√P the compliance is
+    /// Σ aᵢ(ln(2hᵢ/β) − cᵢ − ½) − ½ ln P · Σ aᵢ, which vanishes at
+    /// ln P* = 2 Σ aᵢ(ln(2hᵢ/β) − cᵢ − ½) / Σ aᵢ.
+    pub fn max_valid_force(&self) -> f64 {
+        let beta = self.half_width(1.0);
+        let (mut weighted, mut total) = (0.0, 0.0);
+        for body in &self.bodies {
+            let nu = body.poisson_ratio;
+            let a = 2.0 * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa);
+            weighted += a * ((2.0 * body.reference_depth_m / beta).ln() - nu / (2.0 * (1.0 - nu)) - 0.5);
+            total += a;
+        }
+        (2.0 * weighted / total).exp()
+    }
+}
+
+/// A contact in series with a linear spring (the rest of the structure): the total approach is
+/// δ = P·c + δ_H(P). Returns P for a given δ by Newton's method inside a shrinking bracket;
+/// zero for δ ≤ 0. `Err` if δ lies beyond the valid range of the Hertz relation.
+pub fn series_force(contact: &LineContact, structural_compliance: f64, approach_m: f64) -> Result<f64, String> {
+    if approach_m <= 0.0 {
+        return Ok(0.0);
+    }
+    let p_max = contact.max_valid_force();
+    let total = |p: f64| p * structural_compliance + contact.hertz_approach(p);
+    if total(p_max) < approach_m {
+        return Err(format!(
+            "approach {approach_m:.3e} m exceeds the validity of the Hertz line-contact relation (max {:.3e} m at {p_max:.3e} N)",
+            total(p_max)
+        ));
+    }
+    let (mut lo, mut hi) = (0.0, p_max);
+    let mut p = approach_m / (structural_compliance + contact.compliance(p_max).max(0.0)).max(1e-300);
+    p = p.clamp(lo, hi);
+    for _ in 0..100 {
+        let residual = total(p) - approach_m;
+        if residual > 0.0 {
+            hi = p
+        } else {
+            lo = p
+        }
+        let slope = structural_compliance + contact.compliance(p.max(1e-300));
+        let mut next = p - residual / slope;
+        if !(next > lo && next < hi) || !next.is_finite() {
+            next = 0.5 * (lo + hi);
+        }
+        if (next - p).abs() <= 1e-14 * p.max(1e-300) || hi - lo <= 1e-14 * hi {
+            return Ok(next);
+        }
+        p = next;
+    }
+    Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn steel_pair() -> LineContact {
+        let body = |r| Body {
+            youngs_modulus_pa: 2e11,
+            poisson_ratio: 0.3,
+            radius_of_curvature_m: r,
+            reference_depth_m: 4.7e-3,
+        };
+        LineContact { length_m: 0.015, bodies: [body(0.0215), body(0.0318)] }
+    }
+
+    /// Closed form: b = √(4PR/(πlE*)) and p₀ = 2P/(πbl) (Johnson, Contact Mechanics, Eq. 4.43).
+    #[test]
+    fn half_width_and_pressure_match_the_closed_form() {
+        let c = steel_pair();
+        let p = 3125.0;
+        let r = 1.0 / (1.0 / 0.0215 + 1.0 / 0.0318);
+        let e_star = 2e11 / (2.0 * (1.0 - 0.09));
+        let b = (4.0 * p * r / (PI * 0.015 * e_star)).sqrt();
+        assert!((c.half_width(p) - b).abs() < 1e-15);
+        assert!((c.peak_pressure(p) - 2.0 * p / (PI * b * 0.015)).abs() < 1e-3);
+    }
+
+    /// Dimensional consistency: the same contact in mm–N–MPa units gives the same approach (in mm).
+    #[test]
+    fn approach_is_independent_of_the_unit_system() {
+        let si = steel_pair();
+        let mut mm = si;
+        mm.length_m *= 1e3;
+        for b in &mut mm.bodies {
+            b.youngs_modulus_pa *= 1e-6; // N/mm²
+            b.radius_of_curvature_m *= 1e3;
+            b.reference_depth_m *= 1e3;
+        }
+        let (d_si, d_mm) = (si.hertz_approach(3125.0), mm.hertz_approach(3125.0));
+        assert!((d_si * 1e3 - d_mm).abs() < 1e-12 * d_mm, "{d_si} m vs {d_mm} mm");
+    }
+
+    #[test]
+    fn inverse_round_trips_and_compliance_is_the_derivative() {
+        let c = steel_pair();
+        for p in [1.0, 100.0, 3125.0, 2e4] {
+            let d = c.hertz_approach(p);
+            let back = series_force(&c, 0.0, d).unwrap();
+            assert!((back - p).abs() < 1e-9 * p, "{p} → {d} → {back}");
+            let with_spring = series_force(&c, 5e-9, d + p * 5e-9).unwrap();
+            assert!((with_spring - p).abs() < 1e-9 * p);
+            let h = 1e-6 * p;
+            let numeric = (c.hertz_approach(p + h) - c.hertz_approach(p - h)) / (2.0 * h);
+            assert!((numeric - c.compliance(p)).abs() < 1e-6 * numeric);
+        }
+        assert_eq!(series_force(&c, 1e-9, -1e-6).unwrap(), 0.0);
+        assert!(series_force(&c, 0.0, 1.0).is_err(), "1 m of approach is beyond any valid Hertz load");
+        let p_star = c.max_valid_force();
+        assert!(c.compliance(p_star).abs() < 1e-9 * c.compliance(1.0), "∂δ/∂P vanishes at P*");
+    }
+}

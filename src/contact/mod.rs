@@ -1,0 +1,4 @@
+//! Contact mechanics: the analytic Hertz line contact (used by the lumped mesh now and by the
+//! PMOR-Hertz statics later).
+
+pub mod hertz;

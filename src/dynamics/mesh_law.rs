@@ -1,0 +1,188 @@
+//! The load-dependent mesh law F(δ, ξ): mesh force along the line of action as a function of
+//! the mesh deflection δ and the roll position ξ, from a table of static deflections.
+//!
+//! Row i of the table holds, at roll ξᵢ = i·p_b/N, the static deflection δ_k(ξᵢ) under the total
+//! mesh force F_k (k = 0…K, F₀ = 0, δ₀ = 0). Between rows the deflections are interpolated
+//! linearly in ξ; along a row F(δ) is piecewise linear. Today the rows come from the analytic
+//! model (`mesh_stiffness::static_deflection_table`); the static FE analyses of the PMOR-Hertz
+//! model give the same kind of table (STE at torque levels).
+//!
+//! Energy. The potential of the mesh is V(δ, ξ) = ∫₀^δ F dδ′. Through the complementary energy
+//! W*(F, ξ) = ∫₀^F δ dF′ it is V = F·δ − W*(F, ξ), and — W* being linear in the row's
+//! deflections — ∂V/∂ξ at fixed δ equals −∂W*/∂ξ at fixed F (envelope theorem). Both are exact
+//! for the interpolated table, so the force on the roll coordinate, ∂W*/∂ξ, keeps the model
+//! conservative. For a linear law δ = F/K(ξ) it is −½K′(ξ)δ².
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeshLaw {
+    pub base_pitch_m: f64,
+    /// F₀ = 0 < F₁ < … < F_K (N).
+    pub force_levels_n: Vec<f64>,
+    /// δ_k(ξᵢ), row-major: N rows of K+1 (m).
+    pub deflection_m: Vec<f64>,
+    /// W*_k(ξᵢ) = ∫₀^{F_k} δ dF at each row and level, cumulative (J).
+    pub complementary_energy_j: Vec<f64>,
+}
+
+/// The law evaluated at one (δ, ξ).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MeshForce {
+    /// Elastic mesh force F (N).
+    pub force_n: f64,
+    /// Tangent stiffness ∂F/∂δ (N/m).
+    pub stiffness_n_per_m: f64,
+    /// Elastic energy V (J).
+    pub potential_j: f64,
+    /// Generalized force on the roll coordinate, −∂V/∂ξ (N).
+    pub roll_force_n: f64,
+}
+
+impl MeshLaw {
+    /// Builds the law from force levels and rows of static deflections (N × (K+1)).
+    pub fn new(base_pitch_m: f64, force_levels_n: Vec<f64>, deflection_m: Vec<f64>) -> Self {
+        let levels = force_levels_n.len();
+        assert!(levels >= 2 && force_levels_n[0] == 0.0 && deflection_m.len() % levels == 0);
+        let mut energy = vec![0.0; deflection_m.len()];
+        for (row, w) in deflection_m.chunks(levels).zip(energy.chunks_mut(levels)) {
+            for k in 1..levels {
+                w[k] = w[k - 1] + 0.5 * (row[k - 1] + row[k]) * (force_levels_n[k] - force_levels_n[k - 1]);
+            }
+        }
+        MeshLaw { base_pitch_m, force_levels_n, deflection_m, complementary_energy_j: energy }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.deflection_m.len() / self.force_levels_n.len()
+    }
+
+    fn row(&self, i: usize) -> &[f64] {
+        let k = self.force_levels_n.len();
+        &self.deflection_m[i * k..(i + 1) * k]
+    }
+
+    fn energy_row(&self, i: usize) -> &[f64] {
+        let k = self.force_levels_n.len();
+        &self.complementary_energy_j[i * k..(i + 1) * k]
+    }
+
+    /// Evaluates the law; zero for δ ≤ 0 (the flanks do not touch). Beyond the last level the
+    /// last segment is extended.
+    pub fn evaluate(&self, delta_m: f64, roll_m: f64) -> MeshForce {
+        if delta_m <= 0.0 {
+            return MeshForce::default();
+        }
+        let n = self.rows();
+        let dx = self.base_pitch_m / n as f64;
+        let pos = roll_m.rem_euclid(self.base_pitch_m) / dx;
+        let i = (pos.floor() as usize).min(n - 1);
+        let t = pos - i as f64;
+        let j = (i + 1) % n;
+        let (a, b) = (self.row(i), self.row(j));
+        let at = |k: usize| (1.0 - t) * a[k] + t * b[k];
+        // Segment m with δ_m(ξ) ≤ δ < δ_{m+1}(ξ): rows increase with k, so bisect.
+        let last = self.force_levels_n.len() - 1;
+        let (mut lo, mut hi) = (0, last);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if at(mid) <= delta_m {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        let m = lo.min(last - 1);
+        let f = &self.force_levels_n;
+        let (d0, d1) = (at(m), at(m + 1));
+        let s = (delta_m - d0) / (d1 - d0);
+        let force = f[m] + s * (f[m + 1] - f[m]);
+        // W* of a row at this force: the cumulative part plus the trapezoid of the segment.
+        let w_row = |row: &[f64], w: &[f64]| {
+            let d_at_force = row[m] + s * (row[m + 1] - row[m]);
+            w[m] + 0.5 * (row[m] + d_at_force) * (force - f[m])
+        };
+        let (wa, wb) = (w_row(a, self.energy_row(i)), w_row(b, self.energy_row(j)));
+        let w_star = (1.0 - t) * wa + t * wb;
+        MeshForce {
+            force_n: force,
+            stiffness_n_per_m: (f[m + 1] - f[m]) / (d1 - d0),
+            potential_j: force * delta_m - w_star,
+            roll_force_n: (wb - wa) / dx,
+        }
+    }
+
+    /// Static deflection at force F and roll ξ (the static transmission error under F).
+    pub fn static_deflection(&self, force_n: f64, roll_m: f64) -> f64 {
+        let n = self.rows();
+        let dx = self.base_pitch_m / n as f64;
+        let pos = roll_m.rem_euclid(self.base_pitch_m) / dx;
+        let i = (pos.floor() as usize).min(n - 1);
+        let t = pos - i as f64;
+        let f = &self.force_levels_n;
+        let m = f.partition_point(|&x| x <= force_n).clamp(1, f.len() - 1) - 1;
+        let s = (force_n - f[m]) / (f[m + 1] - f[m]);
+        let d = |row: &[f64]| row[m] + s * (row[m + 1] - row[m]);
+        (1.0 - t) * d(self.row(i)) + t * d(self.row((i + 1) % n))
+    }
+
+    /// Secant stiffness F / mean-over-ξ static deflection (N/m): what ISO 6336-1's c_γα measures.
+    pub fn mean_secant_stiffness(&self, force_n: f64) -> f64 {
+        let n = self.rows();
+        let dx = self.base_pitch_m / n as f64;
+        let mean = (0..n).map(|i| self.static_deflection(force_n, i as f64 * dx)).sum::<f64>() / n as f64;
+        force_n / mean
+    }
+
+    /// Mean over ξ of the tangent stiffness ∂F/∂δ at the static deflection under F (N/m): what
+    /// sets the frequency of small vibrations about that load.
+    pub fn mean_tangent_stiffness(&self, force_n: f64) -> f64 {
+        let n = self.rows();
+        let dx = self.base_pitch_m / n as f64;
+        (0..n)
+            .map(|i| {
+                let xi = (i as f64 + 0.5) * dx;
+                self.evaluate(self.static_deflection(force_n, xi), xi).stiffness_n_per_m
+            })
+            .sum::<f64>()
+            / n as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A linear law δ = F/K(ξ) with K varying smoothly: V = ½Kδ² and −∂V/∂ξ = −½K′δ² (closed
+    /// form), F = Kδ.
+    #[test]
+    fn linear_table_reproduces_the_linear_law() {
+        let (n, pitch) = (64, 0.02);
+        let k = |xi: f64| 2e8 * (1.0 + 0.3 * (2.0 * std::f64::consts::PI * xi / pitch).sin());
+        let levels: Vec<f64> = (0..=8).map(|i| 1000.0 * i as f64).collect();
+        let mut rows = Vec::new();
+        for i in 0..n {
+            let xi = pitch * i as f64 / n as f64;
+            rows.extend(levels.iter().map(|f| f / k(xi)));
+        }
+        let law = MeshLaw::new(pitch, levels, rows);
+        let xi = 3.0 * pitch / n as f64; // on a row: exact
+        let delta = 2.5e-5;
+        let m = law.evaluate(delta, xi);
+        assert!((m.force_n - k(xi) * delta).abs() < 1e-9 * m.force_n);
+        assert!((m.potential_j - 0.5 * k(xi) * delta * delta).abs() < 1e-12);
+        // Between rows, the energy and the roll force are consistent: −∂V/∂ξ by central difference.
+        let xi = 3.4 * pitch / n as f64;
+        let h = 1e-9;
+        let numeric = -(law.evaluate(delta, xi + h).potential_j - law.evaluate(delta, xi - h).potential_j) / (2.0 * h);
+        let m = law.evaluate(delta, xi);
+        assert!(
+            (numeric - m.roll_force_n).abs() < 1e-6 * m.roll_force_n.abs().max(1.0),
+            "{numeric} vs {}",
+            m.roll_force_n
+        );
+        // And F = ∂V/∂δ.
+        let dv = (law.evaluate(delta + 1e-10, xi).potential_j - law.evaluate(delta - 1e-10, xi).potential_j) / 2e-10;
+        assert!((dv - m.force_n).abs() < 1e-5 * m.force_n);
+    }
+}
