@@ -62,11 +62,13 @@ Usage
 from __future__ import annotations
 
 import argparse
+import bisect
 import json
 import math
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -143,13 +145,123 @@ class DrivetrainParams:
 # ---------------------------------------------------------------------------
 
 
+class MeshForce(NamedTuple):
+    """The force law of one flank evaluated at one (δ, ξ) (zeros when the flank is open)."""
+
+    force_n: float             # elastic mesh force F (N), ≥ 0
+    stiffness_n_per_m: float   # tangent stiffness ∂F/∂δ (N/m)
+    potential_j: float         # elastic energy V(δ, ξ) = ∫₀^δ F dδ′ (J)
+    roll_force_n: float        # generalized force on the roll coordinate, −∂V/∂ξ (N)
+
+
+class MeshState(NamedTuple):
+    """The mesh at one state of the two gears."""
+
+    force_n: float             # contact force along the line of action incl. damping (N); > 0 drive, < 0 coast
+    roll_force_n: float        # −∂V/∂ξ of the flank in contact (N); 0 when no flank touches
+    stiffness_n_per_m: float   # tangent stiffness of the flank in contact (N/m); 0 when none
+    potential_j: float         # elastic energy of the flank in contact (J)
+    elastic_force_n: float     # the undamped part of force_n (N)
+
+
+class FlankLaw:
+    """Load-dependent force law F(δ, ξ) of one flank, from a table of static deflections.
+
+    Row i holds, at roll ξ_i = i·p_b/N, the static deflection δ_k(ξ_i) under the mesh force
+    F_k (k = 0…K, F_0 = 0, δ_0 = 0).  Rows are interpolated linearly in ξ; along a row F(δ)
+    is piecewise linear and its last segment extends beyond δ_K.  The potential is
+    V = F·δ − W*(F, ξ) with the complementary energy W* = ∫₀^F δ dF′, exact (trapezoids) for
+    the piecewise-linear rows, and the roll force −∂V/∂ξ = ∂W*/∂ξ at fixed F.  A line-by-line
+    transcription of ``MeshLaw::evaluate`` in src/dynamics/mesh_law.rs (same operation order).
+    """
+
+    def __init__(self, base_pitch_m: float, force_levels_n, deflection_rows_m):
+        self.base_pitch_m = float(base_pitch_m)
+        self.force_levels_n = [float(f) for f in force_levels_n]
+        self.rows = [[float(d) for d in row] for row in deflection_rows_m]
+        f = self.force_levels_n
+        levels = len(f)
+        if levels < 2 or f[0] != 0.0 or any(b <= a for a, b in zip(f, f[1:])):
+            raise ValueError("force levels must start at 0 and increase strictly")
+        if len(self.rows) < 2 or any(len(row) != levels for row in self.rows):
+            raise ValueError("need >= 2 deflection rows of one value per force level")
+        self.energy_rows = []
+        for row in self.rows:
+            w = [0.0] * levels
+            for k in range(1, levels):
+                w[k] = w[k - 1] + 0.5 * (row[k - 1] + row[k]) * (f[k] - f[k - 1])
+            self.energy_rows.append(w)
+
+    def _interval(self, roll_m: float) -> tuple[int, int, float, float]:
+        n = len(self.rows)
+        dx = self.base_pitch_m / n
+        pos = (roll_m % self.base_pitch_m) / dx      # Python's float % is Rust's rem_euclid here
+        i = min(math.floor(pos), n - 1)
+        return i, (i + 1) % n, pos - i, dx
+
+    def evaluate(self, delta_m: float, roll_m: float) -> MeshForce:
+        if delta_m <= 0.0:
+            return MeshForce(0.0, 0.0, 0.0, 0.0)
+        i, j, t, dx = self._interval(roll_m)
+        a, b = self.rows[i], self.rows[j]
+        f = self.force_levels_n
+        last = len(f) - 1
+        lo, hi = 0, last
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if (1.0 - t) * a[mid] + t * b[mid] <= delta_m:
+                lo = mid
+            else:
+                hi = mid
+        m = min(lo, last - 1)
+        d0 = (1.0 - t) * a[m] + t * b[m]
+        d1 = (1.0 - t) * a[m + 1] + t * b[m + 1]
+        s = (delta_m - d0) / (d1 - d0)
+        force = f[m] + s * (f[m + 1] - f[m])
+
+        def w_row(row, w):
+            d_at_force = row[m] + s * (row[m + 1] - row[m])
+            return w[m] + 0.5 * (row[m] + d_at_force) * (force - f[m])
+
+        wa, wb = w_row(a, self.energy_rows[i]), w_row(b, self.energy_rows[j])
+        w_star = (1.0 - t) * wa + t * wb
+        return MeshForce(force, (f[m + 1] - f[m]) / (d1 - d0), force * delta_m - w_star, (wb - wa) / dx)
+
+    def static_deflection_m(self, force_n: float, roll_m: float) -> float:
+        """δ(F, ξ): the static mesh deflection under the force F (extrapolated beyond F_K)."""
+        i, j, t, _ = self._interval(roll_m)
+        f = self.force_levels_n
+        m = min(max(bisect.bisect_right(f, force_n), 1), len(f) - 1) - 1
+        s = (force_n - f[m]) / (f[m + 1] - f[m])
+        a, b = self.rows[i], self.rows[j]
+        return (1.0 - t) * (a[m] + s * (a[m + 1] - a[m])) + t * (b[m] + s * (b[m + 1] - b[m]))
+
+    def mean_static_deflection_m(self, force_n: float) -> float:
+        """Mean over one base pitch of δ(F, ξ) (the rows are a uniform periodic grid)."""
+        n = len(self.rows)
+        return sum(self.static_deflection_m(force_n, i * self.base_pitch_m / n) for i in range(n)) / n
+
+    def mean_tangent_stiffness_n_per_m(self, force_n: float) -> float:
+        """Mean over ξ (mid-interval samples) of ∂F/∂δ at the static deflection under F."""
+        n = len(self.rows)
+        dx = self.base_pitch_m / n
+        return sum(self.evaluate(self.static_deflection_m(force_n, (i + 0.5) * dx), (i + 0.5) * dx)
+                   .stiffness_n_per_m for i in range(n)) / n
+
+
 class MeshLaw:
     """Gear-mesh force law, built from the ``fmu-build inspect --json`` dump.
 
-    K(s), Kc(s): drive / coast flank stiffness, periodic piecewise-linear in
-    the roll distance s = (r_b1·θ1 + roll_offset) mod p_b.  The contact force
-    acts along the line of action; the gradient term G = ½·K'(s)·δ² makes the
-    force derive from the potential V = ½·K(s)·δ².
+    Drive flank (δ > 0) and coast flank (δ < −j) each follow a load-dependent law
+    F(δ, ξ) (:class:`FlankLaw`), ξ = r_b1·θ1 + roll_offset the roll position, periodic
+    in p_b.  The coast law is written for the positive closure −(δ + j) and pushes back.
+    Damping c·δ̇ acts only while a flank touches, and a flank never pulls.  Besides the
+    mesh force F = ∂V/∂δ the mesh exerts the roll force R = −∂V/∂ξ on gear 1, so the
+    undamped law conserves E = kinetic + V − work of the torques:
+
+        J1·dw_1/dt = τ1 − r_b1·F + r_b1·R,      J2·dw_2/dt = τ2 + r_b2·F.
+
+    For a linear table δ_k = F_k/K(ξ) this is the old law F = K·δ, R = −½K′δ².
     """
 
     def __init__(self, mesh: dict):
@@ -164,20 +276,18 @@ class MeshLaw:
         self.damping_n_s_per_m = float(mesh["mesh_damping_n_s_per_m"])
         self.roll_offset_m = float(mesh["roll_offset_m"])
         self.natural_frequency_hz = float(mesh["mesh_natural_frequency_hz"])
-        roll = [float(x) for x in mesh["roll_m"]]
-        drive = [float(x) for x in mesh["drive_stiffness_n_per_m"]]
-        coast = [float(x) for x in mesh["coast_stiffness_n_per_m"]]
-        if not (len(roll) == len(drive) == len(coast) and len(roll) >= 2):
-            raise ValueError("mesh tables must have equal length >= 2")
-        n = len(roll)
-        # Segment i runs from roll[i] to roll[i+1]; the last one wraps to roll[0] + p_b.
-        ends = roll[1:] + [roll[0] + self.base_pitch_m]
-        self.roll_m = roll
-        self.drive_stiffness_n_per_m = drive
-        self.coast_stiffness_n_per_m = coast
-        self._drive_slope = [(drive[(i + 1) % n] - drive[i]) / (ends[i] - roll[i]) for i in range(n)]
-        self._coast_slope = [(coast[(i + 1) % n] - coast[i]) / (ends[i] - roll[i]) for i in range(n)]
-        self._segment_length_m = self.base_pitch_m / n
+        self.reference_force_n = float(mesh["reference_force_n"])
+        self.reference_stiffness_n_per_m = float(mesh["reference_stiffness_n_per_m"])
+        self.roll_m = [float(x) for x in mesh["roll_m"]]
+        self.force_levels_n = [float(x) for x in mesh["force_levels_n"]]
+        self.drive = FlankLaw(self.base_pitch_m, self.force_levels_n, mesh["drive_deflection_m"])
+        self.coast = FlankLaw(self.base_pitch_m, self.force_levels_n, mesh["coast_deflection_m"])
+        n = len(self.roll_m)
+        if not (len(self.drive.rows) == len(self.coast.rows) == n):
+            raise ValueError("roll_m and the deflection tables must have the same number of rows")
+        for i, s in enumerate(self.roll_m):
+            if abs(s - i * self.base_pitch_m / n) > 1e-12 * self.base_pitch_m:
+                raise ValueError("roll_m must be the uniform grid i·p_b/N")
 
     @classmethod
     def from_json(cls, mesh_json: str | Path | dict) -> "MeshLaw":
@@ -190,51 +300,48 @@ class MeshLaw:
         return self.teeth_1 / self.teeth_2
 
     def roll_position_m(self, phi_1_rad: float) -> float:
+        """Roll position ξ = (r_b1·φ1 + roll_offset) mod p_b."""
         return (self.base_radius_1_m * phi_1_rad + self.roll_offset_m) % self.base_pitch_m
 
-    def _segment(self, s_m: float) -> int:
-        n = len(self.roll_m)
-        i = min(int(s_m / self._segment_length_m), n - 1)
-        # Guard against rounding at the segment boundaries.
-        while i > 0 and s_m < self.roll_m[i]:
-            i -= 1
-        while i < n - 1 and s_m >= self.roll_m[i + 1]:
-            i += 1
-        return i
+    def mesh_state(self, phi_1, w_1, phi_2, w_2, damping_n_s_per_m=None) -> MeshState:
+        """The mesh (force, roll force, stiffness, potential) at a state of the gears."""
+        delta = self.base_radius_1_m * phi_1 - self.base_radius_2_m * phi_2
+        delta_dot = self.base_radius_1_m * w_1 - self.base_radius_2_m * w_2
+        xi = self.base_radius_1_m * phi_1 + self.roll_offset_m
+        c = self.damping_n_s_per_m if damping_n_s_per_m is None else damping_n_s_per_m
+        if delta > 0.0:
+            law = self.drive.evaluate(delta, xi)
+            return MeshState(max(law.force_n + c * delta_dot, 0.0), law.roll_force_n,
+                             law.stiffness_n_per_m, law.potential_j, law.force_n)
+        if delta < -self.backlash_m:
+            law = self.coast.evaluate(-(delta + self.backlash_m), xi)
+            return MeshState(min(-law.force_n + c * delta_dot, 0.0), law.roll_force_n,
+                             law.stiffness_n_per_m, law.potential_j, -law.force_n)
+        return MeshState(0.0, 0.0, 0.0, 0.0, 0.0)
 
-    def stiffness(self, phi_1_rad: float) -> tuple[float, float, float, float]:
-        """(K, K', Kc, Kc') at the roll position of gear 1."""
-        s = self.roll_position_m(phi_1_rad)
-        i = self._segment(s)
-        ds = s - self.roll_m[i]
-        k_drive = self.drive_stiffness_n_per_m[i] + self._drive_slope[i] * ds
-        k_coast = self.coast_stiffness_n_per_m[i] + self._coast_slope[i] * ds
-        return k_drive, self._drive_slope[i], k_coast, self._coast_slope[i]
+    def force_n(self, phi_1, w_1, phi_2, w_2) -> float:
+        """Normal mesh force F (N) including damping; > 0 on the drive flank, < 0 on the coast flank."""
+        return self.mesh_state(phi_1, w_1, phi_2, w_2).force_n
 
-    def force_n(self, phi_1, w_1, phi_2, w_2) -> tuple[float, float]:
-        """(F, G): normal mesh force and potential-gradient term, both in N."""
-        dte_m = self.base_radius_1_m * phi_1 - self.base_radius_2_m * phi_2
-        dte_rate_m_s = self.base_radius_1_m * w_1 - self.base_radius_2_m * w_2
-        c = self.damping_n_s_per_m
-        j = self.backlash_m
-        if dte_m > 0.0:
-            k, dk, _, _ = self.stiffness(phi_1)
-            return max(k * dte_m + c * dte_rate_m_s, 0.0), 0.5 * dk * dte_m * dte_m
-        if dte_m < -j:
-            _, _, kc, dkc = self.stiffness(phi_1)
-            pen = dte_m + j
-            return min(kc * pen + c * dte_rate_m_s, 0.0), 0.5 * dkc * pen * pen
-        return 0.0, 0.0
+    def potential_j(self, phi_1, phi_2) -> float:
+        """Elastic energy V of the mesh (J) at the gear angles."""
+        return self.mesh_state(phi_1, 0.0, phi_2, 0.0, damping_n_s_per_m=0.0).potential_j
 
     def gear_accelerations(self, phi_1, w_1, phi_2, w_2, tau_1_nm, tau_2_nm,
-                           inertia_1_kgm2=None, inertia_2_kgm2=None) -> tuple[float, float, float]:
-        """(dw_1/dt, dw_2/dt, F) of the two gears under shaft torques tau_1, tau_2."""
+                           inertia_1_kgm2=None, inertia_2_kgm2=None,
+                           include_roll_force=True) -> tuple[float, float, float]:
+        """(dw_1/dt, dw_2/dt, F) of the two gears under shaft torques tau_1, tau_2.
+
+        ``include_roll_force=False`` drops R (a negative control for energy checks only).
+        """
         j1 = self.inertia_1_kgm2 if inertia_1_kgm2 is None else inertia_1_kgm2
         j2 = self.inertia_2_kgm2 if inertia_2_kgm2 is None else inertia_2_kgm2
-        force, gradient = self.force_n(phi_1, w_1, phi_2, w_2)
-        dw_1 = (tau_1_nm - self.base_radius_1_m * (force + gradient)) / j1
-        dw_2 = (tau_2_nm + self.base_radius_2_m * force) / j2
-        return dw_1, dw_2, force
+        mesh = self.mesh_state(phi_1, w_1, phi_2, w_2)
+        roll = mesh.roll_force_n if include_roll_force else 0.0
+        # Same operation order as LumpedModel::derivative.
+        dw_1 = (tau_1_nm - self.base_radius_1_m * mesh.force_n + self.base_radius_1_m * roll) / j1
+        dw_2 = (tau_2_nm + self.base_radius_2_m * mesh.force_n) / j2
+        return dw_1, dw_2, mesh.force_n
 
 
 # ---------------------------------------------------------------------------
@@ -376,9 +483,10 @@ def monolithic_reference(mesh_json, params: DrivetrainParams, t_end: float,
 
     ``mesh_json``: path to (or dict of) the ``fmu-build inspect --json`` dump.
     ``sample_times``: where to sample the dense solution (default: 2001 points).
-    The step is bounded by 1/40 of the mesh natural period; the kinks of the
-    stiffness tables and the contact on/off switching are left to the
-    (tight) error control.
+    The step is bounded by 1/40 of the mesh natural period (at the dump's
+    reference force; the load-dependent stiffness varies by a few % over the
+    tabulated loads); the kinks of the deflection tables and the contact
+    on/off switching are left to the (tight) error control.
     """
     from scipy.integrate import solve_ivp
 
@@ -403,7 +511,7 @@ def monolithic_reference(mesh_json, params: DrivetrainParams, t_end: float,
 
     shaft_1 = params.shaft_1.stiffness_nm_per_rad * (theta_m - phi_1) + params.shaft_1.damping_nms_per_rad * (w_m - w_1)
     shaft_2 = params.shaft_2.stiffness_nm_per_rad * (phi_2 - theta_L) + params.shaft_2.damping_nms_per_rad * (w_2 - w_L)
-    mesh_force = np.array([mesh.force_n(*x)[0] for x in zip(phi_1, w_1, phi_2, w_2)])
+    mesh_force = np.array([mesh.force_n(*x) for x in zip(phi_1, w_1, phi_2, w_2)])
     return {
         "time_s": sol.t, "motor_angle_rad": theta_m, "motor_speed_rad_s": w_m,
         "load_angle_rad": theta_L, "load_speed_rad_s": w_L,

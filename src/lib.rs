@@ -6,6 +6,7 @@
 
 pub mod contact;
 pub mod dynamics;
+pub mod fe;
 pub mod fmi2;
 pub mod gear;
 pub mod interface;

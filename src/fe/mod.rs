@@ -1,0 +1,6 @@
+//! The finite element model of a gear (design §4.2): hex8 elements, meshes, sparse assembly and
+//! solvers. Offline only: nothing on the FMU's step path calls into this module.
+
+pub mod assembly;
+pub mod hex8;
+pub mod mesh;
