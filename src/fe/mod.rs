@@ -2,5 +2,6 @@
 //! solvers. Offline only: nothing on the FMU's step path calls into this module.
 
 pub mod assembly;
+pub mod gear_mesh;
 pub mod hex8;
 pub mod mesh;

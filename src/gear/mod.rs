@@ -43,8 +43,10 @@ impl Gear {
     /// Half tooth-thickness angle of the real profile at radius r: the generated fillet from the
     /// root circle up to where it meets the involute, the involute above.
     pub fn profile_half_thickness_angle(&self, radius_m: f64, transverse_pressure_angle: f64) -> f64 {
+        // The involute holds from the form circle up (the rack's straight flank generates it);
+        // the fillet table, whose discrete end lies near that point, is used only below it.
         match self.fillet.last() {
-            Some(&(r_join, _)) if radius_m < r_join => {
+            Some(&(r_join, _)) if radius_m < r_join.min(self.form_radius_m) => {
                 let i = self.fillet.partition_point(|&(r, _)| r < radius_m).clamp(1, self.fillet.len() - 1);
                 let ((r0, a0), (r1, a1)) = (self.fillet[i - 1], self.fillet[i]);
                 a0 + (a1 - a0) * (radius_m - r0) / (r1 - r0)

@@ -1,0 +1,108 @@
+//! The gear mesh against independent references: exact section area (mass), tooth periodicity,
+//! rigid-body modes of the unclamped gear, and the involute's normals.
+
+use gearfmu::fe::assembly::{self, DofMap, Material};
+use gearfmu::fe::gear_mesh::{mesh_gear, section_area, MeshSpec};
+use gearfmu::fe::hex8::Formulation;
+use gearfmu::gear::{GearPair, PairSpec};
+use std::path::Path;
+
+fn pair(name: &str) -> GearPair {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(name);
+    GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap()
+}
+
+fn material(p: &GearPair) -> Material {
+    Material { youngs_modulus_pa: p.youngs_modulus_pa, poisson_ratio: p.poisson_ratio, density_kg_m3: p.density_kg_m3 }
+}
+
+/// Mass of the meshed gear = ρ·(profile area × face width − bore), the area by quadrature of the
+/// exact profile (fillet + involute), within 0.5 %.
+#[test]
+fn meshed_mass_equals_density_times_exact_volume() {
+    for name in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
+        let p = pair(name);
+        for gear in [&p.gear1, &p.gear2] {
+            let gm = mesh_gear(&p, gear, &MeshSpec::default());
+            let meshed = gm.mesh.volume() * p.density_kg_m3;
+            let exact = section_area(&p, gear) * p.face_width_m * p.density_kg_m3;
+            let error = (meshed - exact) / exact;
+            println!(
+                "{name} z = {}: meshed mass {meshed:.5} kg, exact {exact:.5} kg, error {:+.3} %",
+                gear.teeth,
+                100.0 * error
+            );
+            assert!(error.abs() < 5e-3);
+        }
+    }
+}
+
+/// Every tooth meshed alike: rotating sector k's nodes by one pitch gives sector k+1's.
+#[test]
+fn rotation_by_one_pitch_maps_nodes_onto_nodes() {
+    let p = pair("kurokawa_helical.toml");
+    let gm = mesh_gear(&p, &p.gear1, &MeshSpec::default());
+    let (z, per) = (gm.teeth, gm.nodes_per_sector);
+    let a = 2.0 * std::f64::consts::PI / z as f64;
+    let layer = z * per;
+    let mut worst: f64 = 0.0;
+    for n in 0..gm.mesh.nodes.len() {
+        let (l, rest) = (n / layer, n % layer);
+        let (k, i) = (rest / per, rest % per);
+        let image = l * layer + ((k + 1) % z) * per + i;
+        let [x, y, zc] = gm.mesh.nodes[n];
+        let rotated = [x * a.cos() - y * a.sin(), x * a.sin() + y * a.cos(), zc];
+        let target = gm.mesh.nodes[image];
+        worst = worst.max((0..3).map(|c| (rotated[c] - target[c]).abs()).fold(0.0, f64::max));
+    }
+    assert!(worst < 1e-12, "largest mismatch {worst} m");
+}
+
+/// The unclamped gear's K has the six rigid-body motions in its null space (K·r = 0).
+#[test]
+fn unclamped_gear_has_six_rigid_body_modes() {
+    let p = pair("kurokawa_spur.toml");
+    let gm = mesh_gear(&p, &p.gear1, &MeshSpec::default());
+    let dofs = DofMap::unclamped(gm.mesh.nodes.len());
+    let k = assembly::stiffness(&gm.mesh, &material(&p), Formulation::IncompatibleModes, &dofs);
+    let k_max = k.as_ref().val().iter().map(|v| v.abs()).fold(0.0, f64::max);
+    for mode in 0..6 {
+        let r: Vec<f64> = (0..dofs.n_free)
+            .map(|i| {
+                let (q, c) = (gm.mesh.nodes[i / 3], i % 3);
+                match mode {
+                    0..=2 => (c == mode) as u8 as f64,
+                    3 => [0.0, -q[2], q[1]][c],
+                    4 => [q[2], 0.0, -q[0]][c],
+                    _ => [-q[1], q[0], 0.0][c],
+                }
+            })
+            .collect();
+        let kr = assembly::mul(&k, &r);
+        let norm_kr = kr.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let norm_r = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!(norm_kr < 1e-9 * k_max * norm_r, "mode {mode}: ‖Kr‖ = {norm_kr:e}");
+    }
+}
+
+/// The transverse normal of an involute is tangent to the base circle: the line through a flank
+/// point along its normal passes at distance r_b from the axis (closed form of the involute).
+#[test]
+fn flank_normals_are_tangent_to_the_base_circle() {
+    let p = pair("kurokawa_spur.toml");
+    for gear in [&p.gear1, &p.gear2] {
+        let gm = mesh_gear(&p, gear, &MeshSpec::default());
+        assert!(!gm.flank_nodes.is_empty());
+        for f in &gm.flank_nodes {
+            let [x, y, _] = gm.mesh.nodes[f.node];
+            let n = f.normal;
+            let distance = (x * n[1] - y * n[0]).abs() / n[0].hypot(n[1]);
+            assert!(
+                (distance - gear.base_radius_m).abs() < 1e-7 * gear.base_radius_m,
+                "{distance} vs {}",
+                gear.base_radius_m
+            );
+            assert!(n[2].abs() < 1e-9, "spur flank normals have no axial part");
+        }
+    }
+}
