@@ -5,3 +5,4 @@ pub mod assembly;
 pub mod gear_mesh;
 pub mod hex8;
 pub mod mesh;
+pub mod tooth_stiffness;

@@ -57,7 +57,7 @@ def _hand_made_mesh(linear=False):
         "inertia_1_kgm2": 2.8e-3, "inertia_2_kgm2": 1.35e-2, "base_pitch_m": p_b, "backlash_m": 1e-4,
         "mesh_damping_n_s_per_m": 0.0, "roll_offset_m": 0.37 * p_b, "roll_m": roll,
         "force_levels_n": forces, "drive_deflection_m": drive, "coast_deflection_m": coast,
-        # Only bound the step of the monolithic reference; not used by the tests below.
+        # Summary values the JSON carries; the tests below do not use them.
         "reference_force_n": 3000.0, "reference_stiffness_n_per_m": 2.0e8, "mesh_natural_frequency_hz": 4000.0,
     }
 

@@ -1,0 +1,86 @@
+//! Single-tooth compliance by finite elements: the gear clamped at the bore, a line load normal
+//! to one flank along the face at the pitch circle, and the deflection along the load (the work
+//! conjugate: fᵀu/|F|²). It contains the local deformation under the line load as far as the mesh
+//! resolves it (a line load is log-singular in elasticity, so this part grows slowly with
+//! refinement; the analytic Hertz term of the PMOR-Hertz method exists to replace it).
+
+use super::assembly::{self, relative_residual, Cholesky, DofMap, Material};
+use super::gear_mesh::{mesh_gear, MeshSpec};
+use super::hex8::Formulation;
+use crate::gear::{Gear, GearPair};
+
+#[derive(Debug, Clone, Copy)]
+pub struct ToothCompliance {
+    pub dofs: usize,
+    /// Deflection along the load per unit load times face width (m²/N); ×1e9 → mm·µm/N.
+    pub compliance_per_width: f64,
+    /// Radius the load acts at (the pitch circle).
+    pub load_radius_m: f64,
+}
+
+pub fn single_tooth_compliance(
+    pair: &GearPair,
+    gear: &Gear,
+    spec: &MeshSpec,
+    formulation: Formulation,
+) -> Result<ToothCompliance, String> {
+    let gm = mesh_gear(pair, gear, spec);
+    let n = gm.mesh.nodes.len();
+    let mut clamped = vec![false; n];
+    for &b in &gm.bore_nodes {
+        clamped[b] = true;
+    }
+    let dofs = DofMap::new(n, &clamped);
+    let material = Material {
+        youngs_modulus_pa: pair.youngs_modulus_pa,
+        poisson_ratio: pair.poisson_ratio,
+        density_kg_m3: pair.density_kg_m3,
+    };
+    let k = assembly::stiffness(&gm.mesh, &material, formulation, &dofs);
+    // Flank rows of tooth 0, side +1, bracketing the pitch radius.
+    let radius = |node: usize| gm.mesh.nodes[node][0].hypot(gm.mesh.nodes[node][1]);
+    let flank: Vec<_> = gm.flank_nodes.iter().filter(|f| f.tooth == 0 && f.side == 1).collect();
+    let r_p = gear.pitch_radius_m;
+    let mut radii: Vec<f64> = flank.iter().map(|f| radius(f.node)).collect();
+    radii.sort_by(f64::total_cmp);
+    radii.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let above = radii.iter().position(|&r| r >= r_p).ok_or("no flank row above the pitch circle")?;
+    if above == 0 {
+        return Err("no flank row below the pitch circle".into());
+    }
+    let (r_lo, r_hi) = (radii[above - 1], radii[above]);
+    let w_hi = (r_p - r_lo) / (r_hi - r_lo);
+    let slices = spec.axial_slices;
+    let total_force = 1000.0;
+    let mut f = vec![0.0; dofs.n_free];
+    for node in &flank {
+        let r = radius(node.node);
+        let w_row = if (r - r_lo).abs() < 1e-9 {
+            1.0 - w_hi
+        } else if (r - r_hi).abs() < 1e-9 {
+            w_hi
+        } else {
+            continue;
+        };
+        // Trapezoid weights across the face: a uniform line load.
+        let w_axial = if node.slice == 0 || node.slice == slices { 0.5 } else { 1.0 } / slices as f64;
+        for c in 0..3 {
+            // The load presses on the flank: against its outward normal.
+            if let Some(i) = dofs.free[3 * node.node + c] {
+                f[i] -= total_force * w_row * w_axial * node.normal[c];
+            }
+        }
+    }
+    let chol = Cholesky::new(&k)?;
+    let u = chol.solve(&f);
+    let residual = relative_residual(&k, &u, &f);
+    if residual > 1e-8 {
+        return Err(format!("Cholesky residual {residual:e} too large"));
+    }
+    let work: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
+    Ok(ToothCompliance {
+        dofs: dofs.n_free,
+        compliance_per_width: work / (total_force * total_force) * pair.face_width_m,
+        load_radius_m: r_p,
+    })
+}
