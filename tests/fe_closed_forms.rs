@@ -166,3 +166,38 @@ fn assembled_mass_is_density_times_volume() {
     let exact = STEEL.density_kg_m3 * 0.05 * 0.02 * 0.03;
     assert!((total - exact).abs() < 1e-12 * exact, "{total} vs {exact}");
 }
+
+/// Clamped–free beam (L/h = 20, square section): the two lowest bending modes in each plane
+/// against Euler–Bernoulli, ω_n = (β_nL)²√(EI/(ρAL⁴)), β₁L = 1.8751, β₂L = 4.6941 (slender
+/// enough that Timoshenko's shear and rotary-inertia corrections stay below ~1 %). The Sturm
+/// count must find exactly the modes returned below σ.
+#[test]
+fn clamped_free_beam_frequencies_within_2_percent_of_euler_bernoulli() {
+    let (length, h): (f64, f64) = (0.2, 0.01);
+    let mesh = box_mesh([length, h, h], [40, 2, 2]);
+    let clamped: Vec<bool> = mesh.nodes.iter().map(|p| p[0] == 0.0).collect();
+    let dofs = DofMap::new(mesh.nodes.len(), &clamped);
+    let k = assembly::stiffness(&mesh, &STEEL, Formulation::IncompatibleModes, &dofs);
+    let m = assembly::mass(&mesh, &STEEL, &dofs);
+    let modes = gearfmu::fe::eigen::lowest_modes(&k, &m, 4, 1e-10, 200, |_, _| {}).unwrap();
+    let f = modes.frequencies_hz();
+    let base = (STEEL.youngs_modulus_pa * h * h / (12.0 * STEEL.density_kg_m3 * length.powi(4))).sqrt()
+        / (2.0 * std::f64::consts::PI);
+    let expected =
+        [1.8751f64.powi(2) * base, 1.8751f64.powi(2) * base, 4.6941f64.powi(2) * base, 4.6941f64.powi(2) * base];
+    for i in 0..4 {
+        let error = (f[i] - expected[i]) / expected[i];
+        println!(
+            "mode {}: {:.2} Hz, Euler–Bernoulli {:.2} Hz ({:+.2} %), residual {:.1e}",
+            i + 1,
+            f[i],
+            expected[i],
+            100.0 * error,
+            modes.residuals[i]
+        );
+        assert!(error.abs() < 0.02, "mode {}: {error}", i + 1);
+        assert!(modes.residuals[i] < 1e-6);
+    }
+    println!("{} iterations; Sturm count below 1.01·λ₄: {}", modes.iterations, modes.sturm_count);
+    assert_eq!(modes.sturm_count, 4, "no mode may be missed below the shift");
+}
