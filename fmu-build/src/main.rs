@@ -2,6 +2,8 @@
 //!
 //! `fmu-build build examples/kurokawa_spur.toml -o KurokawaSpur.fmu [--model lumped]`
 //! `fmu-build inspect examples/kurokawa_spur.toml [--json mesh.json]`
+//! `fmu-build mesh examples/kurokawa_spur.toml [--vtk out/spur] [--across N --profile N --rim N --slices N]`
+//! `fmu-build modes examples/kurokawa_spur.toml -n 10 [--vtk out/spur]`
 
 mod model_description;
 
@@ -9,9 +11,14 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
+use gearfmu::fe::assembly::{self, DofMap, Material};
+use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh, MeshSpec};
+use gearfmu::fe::hex8::Formulation;
+use gearfmu::fe::{eigen, vtk};
 use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::interface;
 use gearfmu::model_file::{ModelFile, ModelKind};
+use indicatif::ProgressBar;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -47,6 +54,39 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Mesh both gears: nodes, elements and DOFs per gear; optionally a VTK file per gear.
+    Mesh {
+        spec: PathBuf,
+        #[command(flatten)]
+        resolution: Resolution,
+        /// Writes <stem>_gear1.vtu and <stem>_gear2.vtu.
+        #[arg(long)]
+        vtk: Option<PathBuf>,
+    },
+    /// Lowest natural frequencies (Hz) of each gear with the bore clamped.
+    Modes {
+        spec: PathBuf,
+        #[arg(short = 'n', long, default_value_t = 10)]
+        count: usize,
+        #[command(flatten)]
+        resolution: Resolution,
+        /// Writes <stem>_gear1.vtu and <stem>_gear2.vtu with the mode shapes.
+        #[arg(long)]
+        vtk: Option<PathBuf>,
+    },
+}
+
+/// Overrides of the spec's [mesh] section.
+#[derive(clap::Args, Clone, Copy)]
+struct Resolution {
+    #[arg(long)]
+    across: Option<usize>,
+    #[arg(long)]
+    profile: Option<usize>,
+    #[arg(long)]
+    rim: Option<usize>,
+    #[arg(long)]
+    slices: Option<usize>,
 }
 
 fn load_pair(spec: &Path) -> Result<GearPair> {
@@ -171,11 +211,125 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
     Ok(())
 }
 
+/// The pair and its mesh resolution (the spec's [mesh], overridden from the command line).
+fn pair_and_mesh(spec_path: &Path, r: Resolution) -> Result<(GearPair, MeshSpec)> {
+    let mut spec = PairSpec::load(spec_path)?;
+    let m = &mut spec.mesh;
+    m.elements_across_tooth = r.across.unwrap_or(m.elements_across_tooth);
+    m.elements_along_profile = r.profile.unwrap_or(m.elements_along_profile);
+    m.elements_in_rim = r.rim.unwrap_or(m.elements_in_rim);
+    m.axial_slices = r.slices.unwrap_or(m.axial_slices);
+    let mesh = spec.mesh;
+    Ok((GearPair::from_spec(&spec)?, mesh))
+}
+
+fn spinner(message: String) -> ProgressBar {
+    let bar = ProgressBar::new_spinner().with_message(message);
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}
+
+fn vtk_path(stem: &Path, gear: usize) -> PathBuf {
+    let name = format!("{}_gear{gear}.vtu", stem.file_stem().and_then(|s| s.to_str()).unwrap_or("gear"));
+    stem.with_file_name(name)
+}
+
+fn node_sets(gm: &GearMesh) -> Vec<(&'static str, Vec<i32>)> {
+    let n = gm.mesh.nodes.len();
+    let mut bore = vec![0; n];
+    for &b in &gm.bore_nodes {
+        bore[b] = 1;
+    }
+    let (mut side, mut tooth) = (vec![0; n], vec![-1; n]);
+    for f in &gm.flank_nodes {
+        side[f.node] = f.side as i32;
+        tooth[f.node] = f.tooth as i32;
+    }
+    vec![("bore", bore), ("flank_side", side), ("flank_tooth", tooth)]
+}
+
+fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>) -> Result<()> {
+    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
+    for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+        let bar = spinner(format!("meshing gear {}", i + 1));
+        let gm = mesh_gear(&pair, gear, &mesh_spec);
+        bar.finish_and_clear();
+        let free = 3 * (gm.mesh.nodes.len() - gm.bore_nodes.len());
+        println!(
+            "gear {} (z = {}): {} nodes, {} elements, {} DOFs ({} free with the bore clamped), {} flank nodes",
+            i + 1,
+            gear.teeth,
+            gm.mesh.nodes.len(),
+            gm.mesh.elements.len(),
+            gm.mesh.dofs(),
+            free,
+            gm.flank_nodes.len()
+        );
+        if let Some(stem) = &vtk {
+            let path = vtk_path(stem, i + 1);
+            vtk::write_vtu(&path, &gm.mesh, &node_sets(&gm), &[])?;
+            println!("  wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<PathBuf>) -> Result<()> {
+    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
+    let material = Material {
+        youngs_modulus_pa: pair.youngs_modulus_pa,
+        poisson_ratio: pair.poisson_ratio,
+        density_kg_m3: pair.density_kg_m3,
+    };
+    for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+        let bar = spinner(format!("gear {}: meshing and assembling", i + 1));
+        let gm = mesh_gear(&pair, gear, &mesh_spec);
+        let mut clamped = vec![false; gm.mesh.nodes.len()];
+        for &b in &gm.bore_nodes {
+            clamped[b] = true;
+        }
+        let dofs = DofMap::new(gm.mesh.nodes.len(), &clamped);
+        let k = assembly::stiffness(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs);
+        let m = assembly::mass(&gm.mesh, &material, &dofs);
+        bar.set_message(format!("gear {}: subspace iteration ({} DOFs)", i + 1, dofs.n_free));
+        let modes = eigen::lowest_modes(&k, &m, count, 1e-10, 300, |it, converged| {
+            bar.set_message(format!("gear {}: subspace iteration {it}, {converged}/{count} converged", i + 1))
+        })
+        .map_err(anyhow::Error::msg)?;
+        bar.finish_and_clear();
+        println!(
+            "gear {} (z = {}, {} DOFs): {} iterations, Sturm count below 1.01·λ_{count}: {} (expected {count})",
+            i + 1,
+            gear.teeth,
+            dofs.n_free,
+            modes.iterations,
+            modes.sturm_count
+        );
+        for (j, (f, r)) in modes.frequencies_hz().iter().zip(&modes.residuals).enumerate() {
+            println!("  mode {:>3}: {:>12.2} Hz   residual {:.1e}", j + 1, f, r);
+        }
+        if let Some(stem) = &vtk {
+            let shapes: Vec<Vec<f64>> = (0..count)
+                .map(|c| dofs.expand(&(0..dofs.n_free).map(|r| modes.vectors[(r, c)]).collect::<Vec<_>>()))
+                .collect();
+            let names: Vec<String> = (0..count).map(|c| format!("mode_{}", c + 1)).collect();
+            let fields: Vec<vtk::NodeField> =
+                shapes.iter().zip(&names).map(|(v, n)| vtk::NodeField { name: n, components: 3, values: v }).collect();
+            let path = vtk_path(stem, i + 1);
+            vtk::write_vtu(&path, &gm.mesh, &node_sets(&gm), &fields)?;
+            println!("  wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Build { spec, output, model, library } => build(&spec, &output, model, library),
         Command::Inspect { spec, json } => inspect(&spec, json),
+        Command::Mesh { spec, resolution, vtk } => mesh_command(&spec, resolution, vtk),
+        Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
     };
     if let Err(e) = result {
         eprintln!("fmu-build: error: {e:#}");

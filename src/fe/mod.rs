@@ -7,3 +7,4 @@ pub mod gear_mesh;
 pub mod hex8;
 pub mod mesh;
 pub mod tooth_stiffness;
+pub mod vtk;

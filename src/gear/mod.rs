@@ -134,6 +134,17 @@ fn positive(field: &str, value: f64) -> Result<f64, SpecError> {
 }
 
 fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
+    let m = &spec.mesh;
+    for (field, value) in [
+        ("mesh.elements_across_tooth", m.elements_across_tooth),
+        ("mesh.elements_along_profile", m.elements_along_profile),
+        ("mesh.elements_in_rim", m.elements_in_rim),
+        ("mesh.axial_slices", m.axial_slices),
+    ] {
+        if value == 0 {
+            return Err(invalid(field, "must be at least 1"));
+        }
+    }
     let rack = &spec.rack;
     let mn = positive("rack.module_mm", rack.module_mm)? * 1e-3;
     let alpha_n_deg = positive("rack.pressure_angle_deg", rack.pressure_angle_deg)?;

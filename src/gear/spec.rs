@@ -116,6 +116,9 @@ pub struct PairSpec {
     pub gear2: GearSpec,
     #[serde(default)]
     pub lumped: LumpedSpec,
+    /// Finite element mesh resolution (defaults: the coarse test mesh).
+    #[serde(default)]
+    pub mesh: crate::fe::gear_mesh::MeshSpec,
 }
 
 fn one() -> f64 {
