@@ -198,6 +198,10 @@ fn clamped_free_beam_frequencies_within_2_percent_of_euler_bernoulli() {
         assert!(error.abs() < 0.02, "mode {}: {error}", i + 1);
         assert!(modes.residuals[i] < 1e-6);
     }
-    println!("{} iterations; Sturm count below 1.01·λ₄: {}", modes.iterations, modes.sturm_count);
-    assert_eq!(modes.sturm_count, 4, "no mode may be missed below the shift");
+    println!(
+        "{} iterations; Sturm count below the shift: {} (Ritz values below it: {})",
+        modes.iterations, modes.sturm_count, modes.ritz_values_below_shift
+    );
+    assert_eq!(modes.sturm_count, modes.ritz_values_below_shift, "no mode may be missed below the shift");
+    assert!(modes.sturm_count >= 4);
 }

@@ -2,7 +2,7 @@
 //!
 //! `fmu-build build examples/kurokawa_spur.toml -o KurokawaSpur.fmu [--model lumped]`
 //! `fmu-build inspect examples/kurokawa_spur.toml [--json mesh.json]`
-//! `fmu-build mesh examples/kurokawa_spur.toml [--vtk out/spur] [--across N --profile N --rim N --slices N]`
+//! `fmu-build mesh examples/kurokawa_spur.toml [--vtk out/spur] [--png out/spur] [--across N --profile N --rim N --slices N]`
 //! `fmu-build modes examples/kurokawa_spur.toml -n 10 [--vtk out/spur]`
 
 mod model_description;
@@ -62,6 +62,9 @@ enum Command {
         /// Writes <stem>_gear1.vtu and <stem>_gear2.vtu.
         #[arg(long)]
         vtk: Option<PathBuf>,
+        /// Writes <stem>_gear1.png and <stem>_gear2.png: the transverse section, mesh over profile.
+        #[arg(long)]
+        png: Option<PathBuf>,
     },
     /// Lowest natural frequencies (Hz) of each gear with the bore clamped.
     Modes {
@@ -229,8 +232,8 @@ fn spinner(message: String) -> ProgressBar {
     bar
 }
 
-fn vtk_path(stem: &Path, gear: usize) -> PathBuf {
-    let name = format!("{}_gear{gear}.vtu", stem.file_stem().and_then(|s| s.to_str()).unwrap_or("gear"));
+fn output_path(stem: &Path, gear: usize, extension: &str) -> PathBuf {
+    let name = format!("{}_gear{gear}.{extension}", stem.file_stem().and_then(|s| s.to_str()).unwrap_or("gear"));
     stem.with_file_name(name)
 }
 
@@ -248,7 +251,7 @@ fn node_sets(gm: &GearMesh) -> Vec<(&'static str, Vec<i32>)> {
     vec![("bore", bore), ("flank_side", side), ("flank_tooth", tooth)]
 }
 
-fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>) -> Result<()> {
+fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>, png: Option<PathBuf>) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
         let bar = spinner(format!("meshing gear {}", i + 1));
@@ -266,8 +269,13 @@ fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>) -> Re
             gm.flank_nodes.len()
         );
         if let Some(stem) = &vtk {
-            let path = vtk_path(stem, i + 1);
+            let path = output_path(stem, i + 1, "vtu");
             vtk::write_vtu(&path, &gm.mesh, &node_sets(&gm), &[])?;
+            println!("  wrote {}", path.display());
+        }
+        if let Some(stem) = &png {
+            let path = output_path(stem, i + 1, "png");
+            gearfmu::fe::profile_png::write_profile_png(&path, &pair, gear, &gm).map_err(anyhow::Error::msg)?;
             println!("  wrote {}", path.display());
         }
     }
@@ -298,12 +306,18 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
         .map_err(anyhow::Error::msg)?;
         bar.finish_and_clear();
         println!(
-            "gear {} (z = {}, {} DOFs): {} iterations, Sturm count below 1.01·λ_{count}: {} (expected {count})",
+            "gear {} (z = {}, {} DOFs): {} iterations; Sturm count below the shift {} = Ritz values below it {}{}",
             i + 1,
             gear.teeth,
             dofs.n_free,
             modes.iterations,
-            modes.sturm_count
+            modes.sturm_count,
+            modes.ritz_values_below_shift,
+            if modes.sturm_count == modes.ritz_values_below_shift {
+                " (no mode missed)"
+            } else {
+                " — A MODE WAS MISSED"
+            }
         );
         for (j, (f, r)) in modes.frequencies_hz().iter().zip(&modes.residuals).enumerate() {
             println!("  mode {:>3}: {:>12.2} Hz   residual {:.1e}", j + 1, f, r);
@@ -315,7 +329,7 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
             let names: Vec<String> = (0..count).map(|c| format!("mode_{}", c + 1)).collect();
             let fields: Vec<vtk::NodeField> =
                 shapes.iter().zip(&names).map(|(v, n)| vtk::NodeField { name: n, components: 3, values: v }).collect();
-            let path = vtk_path(stem, i + 1);
+            let path = output_path(stem, i + 1, "vtu");
             vtk::write_vtu(&path, &gm.mesh, &node_sets(&gm), &fields)?;
             println!("  wrote {}", path.display());
         }
@@ -328,7 +342,7 @@ fn main() {
     let result = match cli.command {
         Command::Build { spec, output, model, library } => build(&spec, &output, model, library),
         Command::Inspect { spec, json } => inspect(&spec, json),
-        Command::Mesh { spec, resolution, vtk } => mesh_command(&spec, resolution, vtk),
+        Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
     };
     if let Err(e) = result {

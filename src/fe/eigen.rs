@@ -3,15 +3,16 @@
 //! cap; residual norms reported; and a Sturm count — the negative pivots of an LDLᵀ of K − σM —
 //! proving that no eigenvalue below σ was missed (design §4.2).
 
-use super::assembly::{mul, Cholesky};
+use super::assembly::Cholesky;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
 };
+use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Mat, Par, Side};
+use faer::{get_global_parallelism, Accum, Mat, Par, Side};
 use nalgebra::DMatrix;
 
 #[derive(Debug, Clone)]
@@ -23,8 +24,10 @@ pub struct Modes {
     /// ‖K x − λ M x‖ / ‖K x‖ per mode.
     pub residuals: Vec<f64>,
     pub iterations: usize,
-    /// Eigenvalues below σ = 1.01·λ_max found by the Sturm count (must equal the modes returned).
+    /// Eigenvalues below the shift σ (between λ_count and the next distinct Ritz value) by the
+    /// Sturm count; equal to `ritz_values_below_shift` when no mode was missed.
     pub sturm_count: usize,
+    pub ritz_values_below_shift: usize,
 }
 
 impl Modes {
@@ -33,20 +36,17 @@ impl Modes {
     }
 }
 
+/// A·X for sparse A and a dense block X (faer's sparse × dense product, parallel).
 fn mat_mul_sparse(a: &SparseColMat<usize, f64>, x: &Mat<f64>) -> Mat<f64> {
-    let mut y = Mat::zeros(x.nrows(), x.ncols());
-    for c in 0..x.ncols() {
-        let col: Vec<f64> = (0..x.nrows()).map(|i| x[(i, c)]).collect();
-        for (i, v) in mul(a, &col).into_iter().enumerate() {
-            y[(i, c)] = v;
-        }
-    }
+    let mut y = Mat::zeros(a.nrows(), x.ncols());
+    sparse_dense_matmul(y.as_mut(), Accum::Replace, a.as_ref(), x.as_ref(), 1.0, get_global_parallelism());
     y
 }
 
+/// AᵀB (q×q) by faer's dense product, copied into nalgebra for the small eigenproblem.
 fn gram(a: &Mat<f64>, b: &Mat<f64>) -> DMatrix<f64> {
-    let q = a.ncols();
-    DMatrix::from_fn(q, q, |i, j| (0..a.nrows()).map(|r| a[(r, i)] * b[(r, j)]).sum())
+    let g = a.transpose() * b;
+    DMatrix::from_fn(g.nrows(), g.ncols(), |i, j| g[(i, j)])
 }
 
 /// The `count` lowest eigenpairs, to relative eigenvalue change `tolerance`, in at most
@@ -100,7 +100,8 @@ pub fn lowest_modes(
         order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
         let qmat = l_inv.transpose() * &eig.eigenvectors;
         eigenvalues = order.iter().map(|&i| eig.eigenvalues[i]).collect();
-        x = Mat::from_fn(n, q, |r, c| (0..q).map(|t| y[(r, t)] * qmat[(t, order[c])]).sum());
+        let ritz = Mat::from_fn(q, q, |t, c| qmat[(t, order[c])]);
+        x = &y * &ritz;
         let converged =
             (0..count).take_while(|&i| ((eigenvalues[i] - previous[i]) / eigenvalues[i]).abs() < tolerance).count();
         progress(it, converged);
@@ -121,7 +122,13 @@ pub fn lowest_modes(
             (num / den).sqrt()
         })
         .collect();
-    let sigma = 1.01 * eigenvalues[count - 1];
+    // The shift: midway between λ_count and the next distinct Ritz value (cyclic symmetry makes
+    // gear modes come in equal pairs). Ritz values bound the true ones from above, so a Sturm
+    // count larger than the Ritz values below σ means a missed mode, never the reverse.
+    let last = eigenvalues[count - 1];
+    let next = eigenvalues[count..].iter().copied().find(|&l| l > last * (1.0 + 1e-6)).unwrap_or(1.02 * last);
+    let sigma = 0.5 * (last + next);
+    let expected = eigenvalues.iter().filter(|&&l| l < sigma).count();
     let sturm = sturm_count(k, m, sigma)?;
     Ok(Modes {
         eigenvalues: eigenvalues[..count].to_vec(),
@@ -129,6 +136,7 @@ pub fn lowest_modes(
         residuals,
         iterations,
         sturm_count: sturm,
+        ritz_values_below_shift: expected,
     })
 }
 
