@@ -4,6 +4,7 @@
 //! `fmu-build inspect examples/kurokawa_spur.toml [--json mesh.json]`
 //! `fmu-build mesh examples/kurokawa_spur.toml [--vtk out/spur] [--png out/spur] [--across N --profile N --rim N --slices N]`
 //! `fmu-build modes examples/kurokawa_spur.toml -n 10 [--vtk out/spur]`
+//! `fmu-build tooth-stiffness examples/kurokawa_spur.toml [--across N --profile N --rim N --slices N]`
 
 mod model_description;
 
@@ -65,6 +66,13 @@ enum Command {
         /// Writes <stem>_gear1.png and <stem>_gear2.png: the transverse section, mesh over profile.
         #[arg(long)]
         png: Option<PathBuf>,
+    },
+    /// Single-tooth compliance at the pitch point by FE (bore clamped, line load on one flank),
+    /// against the potential-energy method and ISO 6336-1.
+    ToothStiffness {
+        spec: PathBuf,
+        #[command(flatten)]
+        resolution: Resolution,
     },
     /// Lowest natural frequencies (Hz) of each gear with the bore clamped.
     Modes {
@@ -337,12 +345,55 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
     Ok(())
 }
 
+fn tooth_stiffness_command(spec: &Path, resolution: Resolution) -> Result<()> {
+    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
+    let mut pair_compliance = 0.0;
+    for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+        let bar = spinner(format!("gear {}: mesh, assembly, Cholesky", i + 1));
+        let fe = gearfmu::fe::tooth_stiffness::single_tooth_compliance(
+            &pair,
+            gear,
+            &mesh_spec,
+            Formulation::IncompatibleModes,
+        )
+        .map_err(anyhow::Error::msg)?;
+        bar.finish_and_clear();
+        let pem = gearfmu::dynamics::mesh_stiffness::tooth_compliance_per_width(
+            gear,
+            &pair,
+            gear.pitch_radius_m,
+            pair.youngs_modulus_pa,
+            pair.poisson_ratio,
+        );
+        println!(
+            "gear {} (z = {}, {} DOF): FE {:.5} mm·µm/N, potential energy {:.5} mm·µm/N (FE/PEM {:.3})",
+            i + 1,
+            gear.teeth,
+            fe.dofs,
+            fe.compliance_per_width * 1e9,
+            pem * 1e9,
+            fe.compliance_per_width / pem
+        );
+        pair_compliance += fe.compliance_per_width * 1e9;
+    }
+    let c = 1.0 / pair_compliance;
+    println!(
+        "pair: FE {c:.2} N/(mm·µm); ISO 6336-1 c′_th {:.2} (FE/ISO {:.3}), c′ = c′_th·C_M·C_B {:.2} (FE/ISO {:.3})",
+        iso6336::theoretical_single_stiffness(&pair),
+        c / iso6336::theoretical_single_stiffness(&pair),
+        iso6336::single_stiffness(&pair),
+        c / iso6336::single_stiffness(&pair)
+    );
+    Ok(())
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Build { spec, output, model, library } => build(&spec, &output, model, library),
         Command::Inspect { spec, json } => inspect(&spec, json),
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
+        Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),
         Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
     };
     if let Err(e) = result {

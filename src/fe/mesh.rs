@@ -59,3 +59,19 @@ pub fn box_mesh(size_m: [f64; 3], cells: [usize; 3]) -> Mesh {
     }
     Mesh { nodes, elements }
 }
+
+/// Rigid-body motion `mode` (0–2: translations along x, y, z; 3–5: rotations about x, y, z
+/// through the origin) evaluated at the nodes, as a DOF vector (node-major).
+pub fn rigid_body_mode(nodes: &[[f64; 3]], mode: usize) -> Vec<f64> {
+    (0..3 * nodes.len())
+        .map(|i| {
+            let (p, c) = (nodes[i / 3], i % 3);
+            match mode {
+                0..=2 => (c == mode) as u8 as f64,
+                3 => [0.0, -p[2], p[1]][c],
+                4 => [p[2], 0.0, -p[0]][c],
+                _ => [-p[1], p[0], 0.0][c],
+            }
+        })
+        .collect()
+}
