@@ -42,6 +42,9 @@ fn undercut_is_refused() {
     // z = 12 at 20° without profile shift: the rack cuts below the interference point.
     let e = refused(&edit("teeth = 21", "teeth = 12"));
     assert!(e.contains("gear1.teeth") && e.contains("undercuts"), "{e}");
+    // …unless the spec says it is wanted.
+    let allowed = edit("teeth = 21", "teeth = 12\nallow_undercut = true");
+    assert!(PairSpec::from_toml(&allowed).and_then(|s| GearPair::from_spec(&s)).is_ok());
 }
 
 #[test]

@@ -7,27 +7,31 @@
 //! that generates the gear surface is where the normal to the cutter passes through I (the
 //! law of gearing): on the tip-rounding circle of center C, that is P = C + ρ·(C − I)/|C − I|.
 
-/// Transverse rack data needed to generate a fillet (SI, transverse section).
+/// The rack cutter in the transverse section (SI). Heights are the normal rack's (h_fP = h*·m_n);
+/// the pitch along the pitch line is π·m_t and the flank angle α_t. The tip rounding, a circle of
+/// radius ρ in the normal section, is an ellipse in the transverse one; it is taken here as the
+/// circle ρ_t that ends the straight flank at the same height as the normal rack does,
+/// ρ_t = ρ(1 − sin α_n)/(1 − sin α_t), so that the form circle is the same in both views (exact for
+/// spur gears).
 pub struct RackCutter {
-    pub module_m: f64,
+    pub pitch_m: f64,
     pub pressure_angle_rad: f64,
-    pub dedendum_coefficient: f64,
-    pub tip_radius_coefficient: f64,
-    pub profile_shift: f64,
+    pub dedendum_m: f64,
+    pub tip_radius_m: f64,
+    pub profile_shift_m: f64,
 }
 
 /// Points (radius, half tooth-thickness angle) of the fillet, from the root circle up to the
 /// point where it meets the involute, sorted by radius.
 pub fn fillet_profile(cutter: &RackCutter, pitch_radius_m: f64, teeth: u32) -> Vec<(f64, f64)> {
-    let m = cutter.module_m;
     let r = pitch_radius_m;
-    let rho = cutter.tip_radius_coefficient * m;
+    let rho = cutter.tip_radius_m;
     let alpha = cutter.pressure_angle_rad;
     // Rounding center, in rack coordinates: height above the datum (towards O) and horizontal
     // offset from the rack tooth's centerline (the rack tooth is centered on the gear space).
-    let h_c = (cutter.dedendum_coefficient - cutter.tip_radius_coefficient) * m;
-    let x_c = std::f64::consts::PI * m / 4.0 - h_c * alpha.tan() - rho / alpha.cos();
-    let y_c = -(r + cutter.profile_shift * m) + h_c;
+    let h_c = cutter.dedendum_m - rho;
+    let x_c = cutter.pitch_m / 4.0 - h_c * alpha.tan() - rho / alpha.cos();
+    let y_c = -(r + cutter.profile_shift_m) + h_c;
     // The tooth to the right of the space centered at −π/2 has its centerline at −π/2 + π/z.
     let tooth_axis = -std::f64::consts::FRAC_PI_2 + std::f64::consts::PI / teeth as f64;
     let mut points: Vec<(f64, f64)> = Vec::new();

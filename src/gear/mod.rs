@@ -202,12 +202,13 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         // measured along the normal to the pitch line) must not pass below the interference
         // point, which lies r·sin²α_t below the pitch line.
         let h_lim = mn * (hf - rho_f * (1.0 - alpha_n.sin()) - x);
-        if h_lim > r * alpha_t.sin().powi(2) + 1e-12 {
+        if h_lim > r * alpha_t.sin().powi(2) + 1e-12 && !g.allow_undercut {
             return Err(invalid(
                 &format!("{which}.teeth"),
                 format!(
                     "the rack cutter undercuts this gear (z = {}, x = {x}): need \
-                     (h_fP − ρ_fP(1−sin α_n) − x)·m_n ≤ r·sin²α_t; raise the teeth or the profile shift",
+                     (h_fP − ρ_fP(1−sin α_n) − x)·m_n ≤ r·sin²α_t; raise the teeth or the profile shift, \
+                     or set allow_undercut = true",
                     g.teeth
                 ),
             ));
@@ -246,11 +247,11 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
             half_thickness_angle_pitch_rad: psi_p,
             fillet: fillet::fillet_profile(
                 &fillet::RackCutter {
-                    module_m: mt,
+                    pitch_m: PI * mt,
                     pressure_angle_rad: alpha_t,
-                    dedendum_coefficient: hf,
-                    tip_radius_coefficient: rho_f,
-                    profile_shift: x * mn / mt,
+                    dedendum_m: hf * mn,
+                    tip_radius_m: rho_f * mn * (1.0 - alpha_n.sin()) / (1.0 - alpha_t.sin()),
+                    profile_shift_m: x * mn,
                 },
                 r,
                 g.teeth as u32,

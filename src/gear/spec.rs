@@ -40,6 +40,9 @@ pub struct GearSpec {
     /// Overrides the polar moment of inertia computed from geometry and density.
     #[serde(default)]
     pub inertia_kgm2: Option<f64>,
+    /// Accept a gear whose root the rack cutter undercuts (refused by default).
+    #[serde(default)]
+    pub allow_undercut: bool,
 }
 
 /// Basic rack (ISO 53 style), shared by both gears.
