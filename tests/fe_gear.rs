@@ -37,6 +37,30 @@ fn meshed_mass_equals_density_times_exact_volume() {
     }
 }
 
+/// The lumped model's inertia (quadrature of the profile) against the meshed gear's rotational
+/// inertia r_zᵀ M r_z from the consistent mass matrix (two independent integrations).
+#[test]
+fn gear_inertia_matches_the_meshed_rotational_inertia() {
+    for name in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
+        let p = pair(name);
+        for gear in [&p.gear1, &p.gear2] {
+            let gm = mesh_gear(&p, gear, &MeshSpec::default());
+            let dofs = DofMap::unclamped(gm.mesh.nodes.len());
+            let m = assembly::mass(&gm.mesh, &material(&p), &dofs);
+            let rz = gearfmu::fe::mesh::rigid_body_mode(&gm.mesh.nodes, 5);
+            let meshed: f64 = assembly::mul(&m, &rz).iter().zip(&rz).map(|(a, b)| a * b).sum();
+            let error = (gear.inertia_kgm2 - meshed) / meshed;
+            println!(
+                "{name} z = {}: inertia {:.6} kg·m², meshed {meshed:.6} kg·m², {:+.3} %",
+                gear.teeth,
+                gear.inertia_kgm2,
+                100.0 * error
+            );
+            assert!(error.abs() < 5e-3);
+        }
+    }
+}
+
 /// Every tooth meshed alike: rotating sector k's nodes by one pitch gives sector k+1's.
 #[test]
 fn rotation_by_one_pitch_maps_nodes_onto_nodes() {

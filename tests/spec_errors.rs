@@ -42,9 +42,14 @@ fn undercut_is_refused() {
     // z = 12 at 20° without profile shift: the rack cuts below the interference point.
     let e = refused(&edit("teeth = 21", "teeth = 12"));
     assert!(e.contains("gear1.teeth") && e.contains("undercuts"), "{e}");
-    // …unless the spec says it is wanted.
-    let allowed = edit("teeth = 21", "teeth = 12\nallow_undercut = true");
-    assert!(PairSpec::from_toml(&allowed).and_then(|s| GearPair::from_spec(&s)).is_ok());
+    // …unless the spec says it is wanted: 14/14 teeth are undercut at 20° (z < 2/sin²α ≈ 17.1)
+    // but mesh without tip interference (√(r_a² − r_b²) = 27.3 mm < a·sin α = 28.7 mm).
+    let both_14 = edit("teeth = 21", "teeth = 14").replacen("teeth = 31", "teeth = 14", 1);
+    let e = refused(&both_14);
+    assert!(e.contains("undercuts"), "{e}");
+    let allowed = both_14.replace("teeth = 14", "teeth = 14\nallow_undercut = true");
+    let accepted = PairSpec::from_toml(&allowed).and_then(|s| GearPair::from_spec(&s));
+    assert!(accepted.is_ok(), "{:?}", accepted.err());
 }
 
 #[test]

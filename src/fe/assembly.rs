@@ -121,14 +121,25 @@ pub const SOLVE_BLOCK: usize = 64;
 
 impl Cholesky {
     pub fn new(k: &SparseColMat<usize, f64>) -> Result<Self, String> {
-        let symbolic = factorize_symbolic_cholesky(k.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-            .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        let symbolic =
+            factorize_symbolic_cholesky(k.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
+                .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let mut values = vec![0.0; symbolic.len_val()];
         let par = get_global_parallelism();
         let mut buffer = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
         symbolic
-            .factorize_numeric_llt(&mut values, k.as_ref(), Side::Lower, Default::default(), par, MemStack::new(&mut buffer), Default::default())
-            .map_err(|e| format!("Cholesky failed (matrix not positive definite: a rigid-body mode not clamped?): {e:?}"))?;
+            .factorize_numeric_llt(
+                &mut values,
+                k.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut buffer),
+                Default::default(),
+            )
+            .map_err(|e| {
+                format!("Cholesky failed (matrix not positive definite: a rigid-body mode not clamped?): {e:?}")
+            })?;
         Ok(Cholesky { symbolic, values, n: k.nrows() })
     }
 

@@ -256,20 +256,8 @@ fn flank_normal(pair: &GearPair, gear: &Gear, alpha_t: f64, r: f64, side: i8, po
     n
 }
 
-/// The exact transverse area of the gear (bore excluded), by quadrature of the profile:
-/// z·∫ 2ψ(r) r dr over the tooth, plus the annulus bore → root. Independent of the mesh.
+/// The exact transverse area of the gear (bore excluded), by quadrature of the profile
+/// (`Gear::section_moments`). Independent of the mesh.
 pub fn section_area(pair: &GearPair, gear: &Gear) -> f64 {
-    let alpha_t = pair.transverse_pressure_angle_rad;
-    let (r_root, psi_root) = gear.fillet.first().copied().unwrap_or((gear.root_radius_m, PI / gear.teeth as f64));
-    let n = 200_000;
-    let dr = (gear.tip_radius_m - r_root) / n as f64;
-    let teeth: f64 = (0..n)
-        .map(|i| {
-            let r = r_root + (i as f64 + 0.5) * dr;
-            let psi = if r <= r_root { psi_root } else { gear.profile_half_thickness_angle(r, alpha_t) };
-            2.0 * psi * r * dr
-        })
-        .sum::<f64>()
-        * gear.teeth as f64;
-    teeth + PI * (r_root * r_root - gear.bore_radius_m.powi(2))
+    gear.section_moments(pair.transverse_pressure_angle_rad).0
 }

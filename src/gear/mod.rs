@@ -40,6 +40,25 @@ impl Gear {
         self.half_thickness_angle_pitch_rad + inv(transverse_pressure_angle) - inv(alpha_r)
     }
 
+    /// Area (m²) and polar moment of area about the axis (m⁴) of the transverse section, bore
+    /// excluded, by quadrature of the real profile: z·∫2ψ(r)·rⁿ dr over the teeth plus the
+    /// annulus bore → root circle.
+    pub fn section_moments(&self, transverse_pressure_angle: f64) -> (f64, f64) {
+        let (r_root, psi_root) = self.fillet.first().copied().unwrap_or((self.root_radius_m, PI / self.teeth as f64));
+        let n = 20_000;
+        let dr = (self.tip_radius_m - r_root) / n as f64;
+        let (mut area, mut polar) = (0.0, 0.0);
+        for i in 0..n {
+            let r = r_root + (i as f64 + 0.5) * dr;
+            let psi = self.profile_half_thickness_angle(r, transverse_pressure_angle).min(psi_root);
+            area += 2.0 * psi * r * dr;
+            polar += 2.0 * psi * r.powi(3) * dr;
+        }
+        let z = self.teeth as f64;
+        let (rb4, rr4) = (self.bore_radius_m.powi(4), r_root.powi(4));
+        (z * area + PI * (r_root * r_root - self.bore_radius_m.powi(2)), z * polar + PI / 2.0 * (rr4 - rb4))
+    }
+
     /// Half tooth-thickness angle of the real profile at radius r: the generated fillet from the
     /// root circle up to where it meets the involute, the involute above.
     pub fn profile_half_thickness_angle(&self, radius_m: f64, transverse_pressure_angle: f64) -> f64 {
@@ -228,14 +247,11 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         if half_tip <= 0.0 {
             return Err(invalid(&format!("{which}.profile_shift"), "the tooth comes to a point below the tip circle"));
         }
-        // Mass: rim/web as a full annulus bore..root, the tooth ring root..tip about half filled
-        // (the FE mesh of a later issue gives the exact figure). Overridable in the spec.
-        let inertia_geom = rho * b * PI / 2.0 * ((rf.powi(4) - bore.powi(4)) + 0.5 * (ra.powi(4) - rf.powi(4)));
-        let inertia = match g.inertia_kgm2 {
-            Some(j) => positive(&format!("{which}.inertia_kgm2"), j)?,
-            None => inertia_geom,
+        let inertia_override = match g.inertia_kgm2 {
+            Some(j) => Some(positive(&format!("{which}.inertia_kgm2"), j)?),
+            None => None,
         };
-        Ok(Gear {
+        let mut gear = Gear {
             teeth: g.teeth as u32,
             profile_shift: x,
             pitch_radius_m: r,
@@ -256,8 +272,11 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
                 r,
                 g.teeth as u32,
             ),
-            inertia_kgm2: inertia,
-        })
+            inertia_kgm2: 0.0,
+        };
+        // Polar moment of inertia of the real section (fillet + involute), unless overridden.
+        gear.inertia_kgm2 = inertia_override.unwrap_or(rho * b * gear.section_moments(alpha_t).1);
+        Ok(gear)
     };
     let g1 = gear("gear1", &spec.gear1)?;
     let g2 = gear("gear2", &spec.gear2)?;
