@@ -11,6 +11,7 @@ pub mod fmi2;
 pub mod gear;
 pub mod interface;
 pub mod model_file;
+pub mod rom;
 
 /// The model the exported fmi2 functions drive.
 pub type FmuModel = dynamics::fmu::GearPairFmu;

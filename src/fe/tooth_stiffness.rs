@@ -5,7 +5,7 @@
 //! refinement; the analytic Hertz term of the PMOR-Hertz method exists to replace it).
 
 use super::assembly::{self, relative_residual, Cholesky, DofMap, Material};
-use super::gear_mesh::{mesh_gear, MeshSpec};
+use super::gear_mesh::{mesh_gear, GearMesh, MeshSpec};
 use super::hex8::Formulation;
 use crate::gear::{Gear, GearPair};
 
@@ -16,6 +16,44 @@ pub struct ToothCompliance {
     pub compliance_per_width: f64,
     /// Radius the load acts at (the pitch circle).
     pub load_radius_m: f64,
+}
+
+/// A uniform line load of `total_force` N along the face, normal to flank side +1 of tooth 0 at
+/// the pitch circle (shared linearly between the two flank rows around it; trapezoid weights
+/// across the face), as (node, force vector).
+pub fn pitch_line_load(
+    gm: &GearMesh,
+    gear: &Gear,
+    axial_slices: usize,
+    total_force: f64,
+) -> Result<Vec<(usize, [f64; 3])>, String> {
+    let radius = |node: usize| gm.mesh.nodes[node][0].hypot(gm.mesh.nodes[node][1]);
+    let flank: Vec<_> = gm.flank_nodes.iter().filter(|f| f.tooth == 0 && f.side == 1).collect();
+    let r_p = gear.pitch_radius_m;
+    let mut radii: Vec<f64> = flank.iter().map(|f| radius(f.node)).collect();
+    radii.sort_by(f64::total_cmp);
+    radii.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let above = radii.iter().position(|&r| r >= r_p).ok_or("no flank row above the pitch circle")?;
+    if above == 0 {
+        return Err("no flank row below the pitch circle".into());
+    }
+    let (r_lo, r_hi) = (radii[above - 1], radii[above]);
+    let w_hi = (r_p - r_lo) / (r_hi - r_lo);
+    let mut load = Vec::new();
+    for node in &flank {
+        let r = radius(node.node);
+        let w_row = if (r - r_lo).abs() < 1e-9 {
+            1.0 - w_hi
+        } else if (r - r_hi).abs() < 1e-9 {
+            w_hi
+        } else {
+            continue;
+        };
+        let w_axial = if node.slice == 0 || node.slice == axial_slices { 0.5 } else { 1.0 } / axial_slices as f64;
+        // The load presses on the flank: against its outward normal.
+        load.push((node.node, node.normal.map(|c| -total_force * w_row * w_axial * c)));
+    }
+    Ok(load)
 }
 
 pub fn single_tooth_compliance(
@@ -37,37 +75,13 @@ pub fn single_tooth_compliance(
         density_kg_m3: pair.density_kg_m3,
     };
     let k = assembly::stiffness(&gm.mesh, &material, formulation, &dofs);
-    // Flank rows of tooth 0, side +1, bracketing the pitch radius.
-    let radius = |node: usize| gm.mesh.nodes[node][0].hypot(gm.mesh.nodes[node][1]);
-    let flank: Vec<_> = gm.flank_nodes.iter().filter(|f| f.tooth == 0 && f.side == 1).collect();
-    let r_p = gear.pitch_radius_m;
-    let mut radii: Vec<f64> = flank.iter().map(|f| radius(f.node)).collect();
-    radii.sort_by(f64::total_cmp);
-    radii.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    let above = radii.iter().position(|&r| r >= r_p).ok_or("no flank row above the pitch circle")?;
-    if above == 0 {
-        return Err("no flank row below the pitch circle".into());
-    }
-    let (r_lo, r_hi) = (radii[above - 1], radii[above]);
-    let w_hi = (r_p - r_lo) / (r_hi - r_lo);
-    let slices = spec.axial_slices;
     let total_force = 1000.0;
+    let load = pitch_line_load(&gm, gear, spec.axial_slices, total_force)?;
     let mut f = vec![0.0; dofs.n_free];
-    for node in &flank {
-        let r = radius(node.node);
-        let w_row = if (r - r_lo).abs() < 1e-9 {
-            1.0 - w_hi
-        } else if (r - r_hi).abs() < 1e-9 {
-            w_hi
-        } else {
-            continue;
-        };
-        // Trapezoid weights across the face: a uniform line load.
-        let w_axial = if node.slice == 0 || node.slice == slices { 0.5 } else { 1.0 } / slices as f64;
+    for &(node, force) in &load {
         for c in 0..3 {
-            // The load presses on the flank: against its outward normal.
-            if let Some(i) = dofs.free[3 * node.node + c] {
-                f[i] -= total_force * w_row * w_axial * node.normal[c];
+            if let Some(i) = dofs.free[3 * node + c] {
+                f[i] += force[c];
             }
         }
     }
@@ -81,6 +95,6 @@ pub fn single_tooth_compliance(
     Ok(ToothCompliance {
         dofs: dofs.n_free,
         compliance_per_width: work / (total_force * total_force) * pair.face_width_m,
-        load_radius_m: r_p,
+        load_radius_m: gear.pitch_radius_m,
     })
 }

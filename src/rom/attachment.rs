@@ -1,0 +1,131 @@
+//! Global attachment responses (paper Sect. 2.2; design §4.3): the static response of the clamped
+//! gear to a flank load ("total"), minus the response of a *partial model* — the same mesh cut by
+//! the section perpendicular to the load at depth h below it, clamped on that section — so that
+//! the local deformation under the load, which the analytic Hertz contact supplies instead, is
+//! removed. (The paper's Eq. 10 prints a sum; the two fields share the same local part, so the
+//! global field is their difference.)
+//!
+//! The partial model is the set of elements whose nodes all lie within depth h of the load point,
+//! depth measured along the load direction; the nodes it shares with the rest of the gear form the
+//! clamped section.
+
+use crate::fe::assembly::{self, Cholesky, DofMap, Material};
+use crate::fe::hex8::Formulation;
+use crate::fe::mesh::Mesh;
+
+/// A load on flank nodes: (node, force vector in N).
+pub type NodalLoad = [(usize, [f64; 3])];
+
+/// Response (all DOFs, node-major) of the partial model to the load; zero outside it.
+pub fn partial_response(
+    mesh: &Mesh,
+    material: &Material,
+    formulation: Formulation,
+    load: &NodalLoad,
+    depth_m: f64,
+) -> Result<Vec<f64>, String> {
+    // The load direction and a reference point on the loaded surface.
+    let total: [f64; 3] = load.iter().fold([0.0; 3], |a, (_, f)| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
+    let norm = (total[0] * total[0] + total[1] * total[1] + total[2] * total[2]).sqrt();
+    if norm == 0.0 {
+        return Err("the load has no resultant: no direction to measure depth along".into());
+    }
+    let dir = total.map(|v| v / norm);
+    let depth = |n: usize| {
+        // Depth below the loaded surface, along the load, measured from the nearest loaded node.
+        load.iter()
+            .map(|&(m, _)| {
+                let (p, q) = (mesh.nodes[n], mesh.nodes[m]);
+                (p[0] - q[0]) * dir[0] + (p[1] - q[1]) * dir[1] + (p[2] - q[2]) * dir[2]
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let node_depth: Vec<f64> = (0..mesh.nodes.len()).map(depth).collect();
+    let tolerance = 1e-9;
+    let inside: Vec<usize> = (0..mesh.elements.len())
+        .filter(|&e| mesh.elements[e].iter().all(|&n| node_depth[n] <= depth_m + tolerance))
+        .collect();
+    if inside.is_empty() {
+        return Err(format!("no element lies within depth {depth_m} m of the load: h is smaller than the mesh"));
+    }
+    // Sub-mesh of the partial model; nodes shared with outside elements are the clamped section.
+    let mut in_partial = vec![false; mesh.nodes.len()];
+    for &e in &inside {
+        for &n in &mesh.elements[e] {
+            in_partial[n] = true;
+        }
+    }
+    let mut on_section = vec![false; mesh.nodes.len()];
+    let mut is_inside = vec![false; mesh.elements.len()];
+    for &e in &inside {
+        is_inside[e] = true;
+    }
+    for (e, el) in mesh.elements.iter().enumerate() {
+        if !is_inside[e] {
+            for &n in el {
+                if in_partial[n] {
+                    on_section[n] = true;
+                }
+            }
+        }
+    }
+    let local: Vec<usize> = (0..mesh.nodes.len()).filter(|&n| in_partial[n]).collect();
+    let mut index = vec![usize::MAX; mesh.nodes.len()];
+    for (i, &n) in local.iter().enumerate() {
+        index[n] = i;
+    }
+    let sub = Mesh {
+        nodes: local.iter().map(|&n| mesh.nodes[n]).collect(),
+        elements: inside.iter().map(|&e| mesh.elements[e].map(|n| index[n])).collect(),
+    };
+    let clamped: Vec<bool> = local.iter().map(|&n| on_section[n]).collect();
+    if !clamped.iter().any(|&c| c) {
+        return Err("the partial model has no clamped section (h reaches through the whole body)".into());
+    }
+    for &(n, _) in load {
+        if on_section[n] || !in_partial[n] {
+            return Err(format!("loaded node {n} is not free inside the partial model (h too small)"));
+        }
+    }
+    let dofs = DofMap::new(sub.nodes.len(), &clamped);
+    let k = assembly::stiffness(&sub, material, formulation, &dofs);
+    let mut f = vec![0.0; dofs.n_free];
+    for &(n, force) in load {
+        for c in 0..3 {
+            if let Some(i) = dofs.free[3 * index[n] + c] {
+                f[i] += force[c];
+            }
+        }
+    }
+    let u_sub = dofs.expand(&Cholesky::new(&k)?.solve(&f));
+    let mut u = vec![0.0; mesh.dofs()];
+    for (i, &n) in local.iter().enumerate() {
+        u[3 * n..3 * n + 3].copy_from_slice(&u_sub[3 * i..3 * i + 3]);
+    }
+    Ok(u)
+}
+
+/// Total and global responses (all DOFs) of the gear clamped by `dofs` (its factorized stiffness
+/// `total_stiffness`) to a flank load: global = total − partial(h).
+pub fn total_and_global_response(
+    mesh: &Mesh,
+    material: &Material,
+    formulation: Formulation,
+    dofs: &DofMap,
+    total_stiffness: &Cholesky,
+    load: &NodalLoad,
+    depth_m: f64,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let mut f = vec![0.0; dofs.n_free];
+    for &(n, force) in load {
+        for c in 0..3 {
+            if let Some(i) = dofs.free[3 * n + c] {
+                f[i] += force[c];
+            }
+        }
+    }
+    let total = dofs.expand(&total_stiffness.solve(&f));
+    let partial = partial_response(mesh, material, formulation, load, depth_m)?;
+    let global = total.iter().zip(&partial).map(|(t, p)| t - p).collect();
+    Ok((total, global))
+}

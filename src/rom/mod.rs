@@ -1,0 +1,4 @@
+//! Reduction for the PMOR-Hertz method (design §4.4): global attachment modes, and later their
+//! SVD compression, the static contact solver and the ROM file.
+
+pub mod attachment;

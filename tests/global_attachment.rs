@@ -1,0 +1,89 @@
+//! Global attachment responses (total − partial model at depth h) against two independent
+//! expectations:
+//! 1. Mesh convergence: under a line load the total FE response is log-singular (it grows without
+//!    bound as the mesh refines); removing the partial model's response must leave a global part
+//!    that converges.
+//! 2. Consistency with the Hertz contact referred to the same depth (design §4.3): when h grows,
+//!    the global part must lose exactly what Weber's approach gains for one body,
+//!    Δδ/(P/l) = 2(1−ν²)/(πE)·ln(h₂/h₁) — the closed form, independent of the FE.
+
+use gearfmu::fe::assembly::{self, Cholesky, DofMap, Material};
+use gearfmu::fe::gear_mesh::{mesh_gear, MeshSpec};
+use gearfmu::fe::hex8::Formulation;
+use gearfmu::fe::tooth_stiffness::pitch_line_load;
+use gearfmu::gear::{GearPair, PairSpec};
+use gearfmu::rom::attachment::total_and_global_response;
+
+/// (total, global at each h) compliance per width (mm·µm/N) at the pitch point of the spur pinion.
+fn compliances(across: usize, profile: usize, rim: usize, depths: &[f64]) -> (f64, Vec<f64>) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
+    let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
+    let material = Material {
+        youngs_modulus_pa: p.youngs_modulus_pa,
+        poisson_ratio: p.poisson_ratio,
+        density_kg_m3: p.density_kg_m3,
+    };
+    let spec = MeshSpec {
+        elements_across_tooth: across,
+        elements_along_profile: profile,
+        elements_in_rim: rim,
+        axial_slices: 4,
+    };
+    let gm = mesh_gear(&p, &p.gear1, &spec);
+    let mut clamped = vec![false; gm.mesh.nodes.len()];
+    for &b in &gm.bore_nodes {
+        clamped[b] = true;
+    }
+    let dofs = DofMap::new(gm.mesh.nodes.len(), &clamped);
+    let k = assembly::stiffness(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs);
+    let chol = Cholesky::new(&k).unwrap();
+    let force = 1000.0;
+    let load = pitch_line_load(&gm, &p.gear1, spec.axial_slices, force).unwrap();
+    let work = |u: &[f64]| load.iter().map(|&(n, f)| (0..3).map(|c| f[c] * u[3 * n + c]).sum::<f64>()).sum::<f64>();
+    let per_width = |u: &[f64]| work(u) / (force * force) * p.face_width_m * 1e9;
+    let mut total = 0.0;
+    let mut global = Vec::new();
+    for &h in depths {
+        let (t, g) =
+            total_and_global_response(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs, &chol, &load, h)
+                .unwrap();
+        total = per_width(&t);
+        global.push(per_width(&g));
+    }
+    (total, global)
+}
+
+#[test]
+fn global_response_converges_where_the_total_does_not_and_matches_weber_depth_dependence() {
+    let depths = [3e-3, 4e-3];
+    let (total_a, global_a) = compliances(8, 16, 8, &depths);
+    let (total_b, global_b) = compliances(10, 20, 10, &depths);
+    let (d_total, d_global) = ((total_b - total_a) / total_a, (global_b[0] - global_a[0]) / global_a[0]);
+    println!(
+        "8/16/8:   total {total_a:.5}, global(h=3 mm) {:.5}, global(h=4 mm) {:.5} mm·µm/N",
+        global_a[0], global_a[1]
+    );
+    println!(
+        "10/20/10: total {total_b:.5}, global(h=3 mm) {:.5}, global(h=4 mm) {:.5} mm·µm/N",
+        global_b[0], global_b[1]
+    );
+    println!(
+        "refinement changes the total by {:+.2} %, the global part by {:+.2} %",
+        100.0 * d_total,
+        100.0 * d_global
+    );
+    // 1. The total grows with refinement (log-singular); the global part moves far less.
+    assert!(d_total > 0.02, "the total should still grow under refinement: {d_total}");
+    assert!(d_global.abs() < 0.25 * d_total, "global {d_global} vs total {d_total}");
+    // 2. What the global part loses from h = 3 to 4 mm, Weber's approach for one body gains.
+    let (e, nu) = (2e11, 0.3);
+    let weber_gain = 2.0 * (1.0 - nu * nu) / (std::f64::consts::PI * e) * (4.0f64 / 3.0).ln() * 1e9;
+    for (name, g) in [("8/16/8", &global_a), ("10/20/10", &global_b)] {
+        let loss = g[0] - g[1];
+        println!(
+            "{name}: global loss {loss:.5} vs Weber gain {weber_gain:.5} mm·µm/N (ratio {:.2})",
+            loss / weber_gain
+        );
+        assert!((loss / weber_gain - 1.0).abs() < 0.2, "{name}: {loss} vs {weber_gain}");
+    }
+}
