@@ -5,13 +5,18 @@
 //! removed. (The paper's Eq. 10 prints a sum; the two fields share the same local part, so the
 //! global field is their difference.)
 //!
-//! The partial model is the set of elements whose nodes all lie within depth h of the load point,
-//! depth measured along the load direction; the nodes it shares with the rest of the gear form the
-//! clamped section.
+//! The partial model is the slab of elements whose nodes all lie within depth |d| ≤ h of the
+//! loaded surface's tangent plane (d measured along the load) and within `LATERAL_REACH`·h of a
+//! loaded node. The nodes it shares with the rest of the gear are clamped: its back face (the
+//! section at depth h) and any face cut through material. Its far lateral edges, where the local
+//! deformation has decayed, end on free surfaces or on such cuts alike.
 
 use crate::fe::assembly::{self, Cholesky, DofMap, Material};
 use crate::fe::hex8::Formulation;
 use crate::fe::mesh::Mesh;
+
+/// How far (in multiples of h) the partial model reaches along the surface from the load.
+pub const LATERAL_REACH: f64 = 5.0;
 
 /// A load on flank nodes: (node, force vector in N).
 pub type NodalLoad = [(usize, [f64; 3])];
@@ -128,4 +133,49 @@ pub fn total_and_global_response(
     let partial = partial_response(mesh, material, formulation, load, depth_m)?;
     let global = total.iter().zip(&partial).map(|(t, p)| t - p).collect();
     Ok((total, global))
+}
+
+/// Global attachment modes ψ_glob (free DOFs × nodes): for each loadable flank node, the response
+/// to a unit load along its inward normal, minus that load's partial model at depth h. The total
+/// responses are one block solve; the partial models run in parallel over nodes.
+pub fn global_attachment_modes(
+    mesh: &Mesh,
+    material: &Material,
+    formulation: Formulation,
+    dofs: &DofMap,
+    total_stiffness: &Cholesky,
+    nodes: &[(usize, [f64; 3])],
+    depth_m: f64,
+    progress: impl Fn(usize) + Sync,
+) -> Result<faer::Mat<f64>, String> {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let n_c = nodes.len();
+    let mut psi = faer::Mat::zeros(dofs.n_free, n_c);
+    for (j, &(node, normal)) in nodes.iter().enumerate() {
+        for c in 0..3 {
+            if let Some(i) = dofs.free[3 * node + c] {
+                psi[(i, j)] = -normal[c];
+            }
+        }
+    }
+    total_stiffness.solve_block(&mut psi);
+    let done = AtomicUsize::new(0);
+    let partials: Vec<Result<Vec<f64>, String>> = nodes
+        .par_iter()
+        .map(|&(node, normal)| {
+            let r = partial_response(mesh, material, formulation, &[(node, normal.map(|v| -v))], depth_m);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            r
+        })
+        .collect();
+    for (j, partial) in partials.into_iter().enumerate() {
+        let partial = partial?;
+        for (dof, free) in dofs.free.iter().enumerate() {
+            if let Some(i) = free {
+                psi[(*i, j)] -= partial[dof];
+            }
+        }
+    }
+    Ok(psi)
 }

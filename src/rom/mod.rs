@@ -2,3 +2,4 @@
 //! SVD compression, the static contact solver and the ROM file.
 
 pub mod attachment;
+pub mod svd;
