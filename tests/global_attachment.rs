@@ -7,8 +7,9 @@
 //!    the global part must lose exactly what Weber's approach gains for one body,
 //!    Δδ/(P/l) = 2(1−ν²)/(πE)·ln(h₂/h₁) — the closed form, independent of the FE.
 
-use gearfmu::fe::assembly::{self, Cholesky, DofMap, Material};
-use gearfmu::fe::gear_mesh::{mesh_gear, MeshSpec};
+use gearfmu::fe::assembly::Cholesky;
+use gearfmu::fe::clamped_gear::ClampedGear;
+use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::tooth_stiffness::pitch_line_load;
 use gearfmu::gear::{GearPair, PairSpec};
@@ -18,34 +19,24 @@ use gearfmu::rom::attachment::total_and_global_response;
 fn compliances(across: usize, profile: usize, rim: usize, depths: &[f64]) -> (f64, Vec<f64>) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
     let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let material = Material {
-        youngs_modulus_pa: p.youngs_modulus_pa,
-        poisson_ratio: p.poisson_ratio,
-        density_kg_m3: p.density_kg_m3,
-    };
     let spec = MeshSpec {
         elements_across_tooth: across,
         elements_along_profile: profile,
         elements_in_rim: rim,
         axial_slices: 4,
     };
-    let gm = mesh_gear(&p, &p.gear1, &spec);
-    let mut clamped = vec![false; gm.mesh.nodes.len()];
-    for &b in &gm.bore_nodes {
-        clamped[b] = true;
-    }
-    let dofs = DofMap::new(gm.mesh.nodes.len(), &clamped);
-    let k = assembly::stiffness(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs);
-    let chol = Cholesky::new(&k).unwrap();
+    let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
+    let (gm, dofs, material) = (&model.mesh, &model.dofs, &model.material);
+    let chol = Cholesky::new(&model.stiffness).unwrap();
     let force = 1000.0;
-    let load = pitch_line_load(&gm, &p.gear1, spec.axial_slices, force).unwrap();
+    let load = pitch_line_load(gm, &p.gear1, spec.axial_slices, force).unwrap();
     let work = |u: &[f64]| load.iter().map(|&(n, f)| (0..3).map(|c| f[c] * u[3 * n + c]).sum::<f64>()).sum::<f64>();
     let per_width = |u: &[f64]| work(u) / (force * force) * p.face_width_m * 1e9;
     let mut total = 0.0;
     let mut global = Vec::new();
     for &h in depths {
         let (t, g) =
-            total_and_global_response(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs, &chol, &load, h)
+            total_and_global_response(&gm.mesh, material, Formulation::IncompatibleModes, dofs, &chol, &load, h)
                 .unwrap();
         total = per_width(&t);
         global.push(per_width(&g));

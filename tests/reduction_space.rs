@@ -6,8 +6,9 @@
 //! space at several p_en.
 
 use faer::Mat;
-use gearfmu::fe::assembly::{self, Cholesky, DofMap, Material};
-use gearfmu::fe::gear_mesh::{mesh_gear, MeshSpec};
+use gearfmu::fe::assembly::{self, Cholesky};
+use gearfmu::fe::clamped_gear::ClampedGear;
+use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::tooth_stiffness::pitch_line_load;
 use gearfmu::gear::{GearPair, PairSpec};
@@ -18,21 +19,11 @@ use gearfmu::rom::svd::compress;
 fn compressed_global_attachment_space_carries_the_line_load() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
     let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let material = Material {
-        youngs_modulus_pa: p.youngs_modulus_pa,
-        poisson_ratio: p.poisson_ratio,
-        density_kg_m3: p.density_kg_m3,
-    };
     let spec = MeshSpec { elements_across_tooth: 6, elements_along_profile: 12, elements_in_rim: 6, axial_slices: 4 };
     let depth = 3e-3;
-    let gm = mesh_gear(&p, &p.gear1, &spec);
-    let mut clamped = vec![false; gm.mesh.nodes.len()];
-    for &b in &gm.bore_nodes {
-        clamped[b] = true;
-    }
-    let dofs = DofMap::new(gm.mesh.nodes.len(), &clamped);
-    let k = assembly::stiffness(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs);
-    let chol = Cholesky::new(&k).unwrap();
+    let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
+    let (gm, dofs, material, k) = (&model.mesh, &model.dofs, &model.material, &model.stiffness);
+    let chol = Cholesky::new(k).unwrap();
     let teeth = [gm.teeth - 1, 0, 1];
     let nodes: Vec<(usize, [f64; 3])> =
         gm.flank_nodes.iter().filter(|f| f.side == 1 && teeth.contains(&f.tooth)).map(|f| (f.node, f.normal)).collect();
@@ -48,17 +39,10 @@ fn compressed_global_attachment_space_carries_the_line_load() {
     )
     .unwrap();
 
-    let load = pitch_line_load(&gm, &p.gear1, spec.axial_slices, 1000.0).unwrap();
-    let mut f = vec![0.0; dofs.n_free];
-    for &(n, force) in &load {
-        for c in 0..3 {
-            if let Some(i) = dofs.free[3 * n + c] {
-                f[i] += force[c];
-            }
-        }
-    }
+    let load = pitch_line_load(gm, &p.gear1, spec.axial_slices, 1000.0).unwrap();
+    let f = dofs.load_vector(&load);
     let (_, global) =
-        total_and_global_response(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs, &chol, &load, depth)
+        total_and_global_response(&gm.mesh, material, Formulation::IncompatibleModes, dofs, &chol, &load, depth)
             .unwrap();
     let direct: f64 = dofs.free.iter().enumerate().filter_map(|(d, free)| free.map(|i| f[i] * global[d])).sum();
     let galerkin = |b: &Mat<f64>| {
@@ -66,7 +50,7 @@ fn compressed_global_attachment_space_carries_the_line_load() {
         let mut kb = Mat::zeros(dofs.n_free, n);
         for j in 0..n {
             let col: Vec<f64> = (0..dofs.n_free).map(|i| b[(i, j)]).collect();
-            for (i, v) in assembly::mul(&k, &col).into_iter().enumerate() {
+            for (i, v) in assembly::mul(k, &col).into_iter().enumerate() {
                 kb[(i, j)] = v;
             }
         }
@@ -86,7 +70,7 @@ fn compressed_global_attachment_space_carries_the_line_load() {
 
     let mut previous_error = f64::INFINITY;
     for p_en in [0.99, 0.999, 0.9999] {
-        let c = compress(&k, &psi, p_en);
+        let c = compress(k, &psi, p_en);
         let reduced = galerkin(&c.basis);
         let error = (reduced - full) / full;
         println!(

@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
-use gearfmu::fe::assembly::{self, DofMap, Material};
+use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh, MeshSpec};
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::{eigen, vtk};
@@ -292,23 +292,12 @@ fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>, png: 
 
 fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<PathBuf>) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
-    let material = Material {
-        youngs_modulus_pa: pair.youngs_modulus_pa,
-        poisson_ratio: pair.poisson_ratio,
-        density_kg_m3: pair.density_kg_m3,
-    };
     for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
         let bar = spinner(format!("gear {}: meshing and assembling", i + 1));
-        let gm = mesh_gear(&pair, gear, &mesh_spec);
-        let mut clamped = vec![false; gm.mesh.nodes.len()];
-        for &b in &gm.bore_nodes {
-            clamped[b] = true;
-        }
-        let dofs = DofMap::new(gm.mesh.nodes.len(), &clamped);
-        let k = assembly::stiffness(&gm.mesh, &material, Formulation::IncompatibleModes, &dofs);
-        let m = assembly::mass(&gm.mesh, &material, &dofs);
+        let model = ClampedGear::new(&pair, gear, &mesh_spec, Formulation::IncompatibleModes);
+        let (gm, dofs, k, m) = (&model.mesh, &model.dofs, &model.stiffness, model.mass());
         bar.set_message(format!("gear {}: subspace iteration ({} DOFs)", i + 1, dofs.n_free));
-        let modes = eigen::lowest_modes(&k, &m, count, 1e-10, 300, |it, converged| {
+        let modes = eigen::lowest_modes(k, &m, count, 1e-10, 300, |it, converged| {
             bar.set_message(format!("gear {}: subspace iteration {it}, {converged}/{count} converged", i + 1))
         })
         .map_err(anyhow::Error::msg)?;
@@ -338,7 +327,7 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
             let fields: Vec<vtk::NodeField> =
                 shapes.iter().zip(&names).map(|(v, n)| vtk::NodeField { name: n, components: 3, values: v }).collect();
             let path = output_path(stem, i + 1, "vtu");
-            vtk::write_vtu(&path, &gm.mesh, &node_sets(&gm), &fields)?;
+            vtk::write_vtu(&path, &gm.mesh, &node_sets(gm), &fields)?;
             println!("  wrote {}", path.display());
         }
     }

@@ -17,6 +17,17 @@ pub struct Material {
     pub density_kg_m3: f64,
 }
 
+impl Material {
+    /// The pair's material.
+    pub fn of(pair: &crate::gear::GearPair) -> Self {
+        Material {
+            youngs_modulus_pa: pair.youngs_modulus_pa,
+            poisson_ratio: pair.poisson_ratio,
+            density_kg_m3: pair.density_kg_m3,
+        }
+    }
+}
+
 /// Numbering of the free DOFs: `free[3·node + c]` is the equation number, `None` if clamped.
 #[derive(Debug, Clone)]
 pub struct DofMap {
@@ -42,6 +53,19 @@ impl DofMap {
 
     pub fn unclamped(n_nodes: usize) -> Self {
         Self::new(n_nodes, &vec![false; n_nodes])
+    }
+
+    /// The free-DOF load vector of nodal forces (forces on clamped DOFs go to the support).
+    pub fn load_vector(&self, load: &[(usize, [f64; 3])]) -> Vec<f64> {
+        let mut f = vec![0.0; self.n_free];
+        for &(node, force) in load {
+            for c in 0..3 {
+                if let Some(i) = self.free[3 * node + c] {
+                    f[i] += force[c];
+                }
+            }
+        }
+        f
     }
 
     /// Expands a vector of free DOFs to all DOFs (zeros at clamped ones).

@@ -2,6 +2,7 @@
 //! solvers. Offline only: nothing on the FMU's step path calls into this module.
 
 pub mod assembly;
+pub mod clamped_gear;
 pub mod eigen;
 pub mod gear_mesh;
 pub mod hex8;

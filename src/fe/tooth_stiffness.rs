@@ -4,8 +4,9 @@
 //! resolves it (a line load is log-singular in elasticity, so this part grows slowly with
 //! refinement; the analytic Hertz term of the PMOR-Hertz method exists to replace it).
 
-use super::assembly::{self, relative_residual, Cholesky, DofMap, Material};
-use super::gear_mesh::{mesh_gear, GearMesh, MeshSpec};
+use super::assembly::{relative_residual, Cholesky};
+use super::clamped_gear::ClampedGear;
+use super::gear_mesh::{GearMesh, MeshSpec};
 use super::hex8::Formulation;
 use crate::gear::{Gear, GearPair};
 
@@ -62,32 +63,14 @@ pub fn single_tooth_compliance(
     spec: &MeshSpec,
     formulation: Formulation,
 ) -> Result<ToothCompliance, String> {
-    let gm = mesh_gear(pair, gear, spec);
-    let n = gm.mesh.nodes.len();
-    let mut clamped = vec![false; n];
-    for &b in &gm.bore_nodes {
-        clamped[b] = true;
-    }
-    let dofs = DofMap::new(n, &clamped);
-    let material = Material {
-        youngs_modulus_pa: pair.youngs_modulus_pa,
-        poisson_ratio: pair.poisson_ratio,
-        density_kg_m3: pair.density_kg_m3,
-    };
-    let k = assembly::stiffness(&gm.mesh, &material, formulation, &dofs);
+    let model = ClampedGear::new(pair, gear, spec, formulation);
+    let (k, dofs) = (&model.stiffness, &model.dofs);
     let total_force = 1000.0;
-    let load = pitch_line_load(&gm, gear, spec.axial_slices, total_force)?;
-    let mut f = vec![0.0; dofs.n_free];
-    for &(node, force) in &load {
-        for c in 0..3 {
-            if let Some(i) = dofs.free[3 * node + c] {
-                f[i] += force[c];
-            }
-        }
-    }
-    let chol = Cholesky::new(&k)?;
+    let load = pitch_line_load(&model.mesh, gear, spec.axial_slices, total_force)?;
+    let f = dofs.load_vector(&load);
+    let chol = Cholesky::new(k)?;
     let u = chol.solve(&f);
-    let residual = relative_residual(&k, &u, &f);
+    let residual = relative_residual(k, &u, &f);
     if residual > 1e-8 {
         return Err(format!("Cholesky residual {residual:e} too large"));
     }

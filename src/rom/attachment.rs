@@ -94,15 +94,8 @@ pub fn partial_response(
     }
     let dofs = DofMap::new(sub.nodes.len(), &clamped);
     let k = assembly::stiffness(&sub, material, formulation, &dofs);
-    let mut f = vec![0.0; dofs.n_free];
-    for &(n, force) in load {
-        for c in 0..3 {
-            if let Some(i) = dofs.free[3 * index[n] + c] {
-                f[i] += force[c];
-            }
-        }
-    }
-    let u_sub = dofs.expand(&Cholesky::new(&k)?.solve(&f));
+    let local_load: Vec<(usize, [f64; 3])> = load.iter().map(|&(n, force)| (index[n], force)).collect();
+    let u_sub = dofs.expand(&Cholesky::new(&k)?.solve(&dofs.load_vector(&local_load)));
     let mut u = vec![0.0; mesh.dofs()];
     for (i, &n) in local.iter().enumerate() {
         u[3 * n..3 * n + 3].copy_from_slice(&u_sub[3 * i..3 * i + 3]);
@@ -121,15 +114,7 @@ pub fn total_and_global_response(
     load: &NodalLoad,
     depth_m: f64,
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let mut f = vec![0.0; dofs.n_free];
-    for &(n, force) in load {
-        for c in 0..3 {
-            if let Some(i) = dofs.free[3 * n + c] {
-                f[i] += force[c];
-            }
-        }
-    }
-    let total = dofs.expand(&total_stiffness.solve(&f));
+    let total = dofs.expand(&total_stiffness.solve(&dofs.load_vector(load)));
     let partial = partial_response(mesh, material, formulation, load, depth_m)?;
     let global = total.iter().zip(&partial).map(|(t, p)| t - p).collect();
     Ok((total, global))

@@ -1,0 +1,37 @@
+//! One gear's finite element model with the bore clamped: the floating frame's attachment, in
+//! which eigenmodes, attachment modes and tooth stiffness are all computed (design §4.2).
+
+use super::assembly::{self, DofMap, Material};
+use super::gear_mesh::{mesh_gear, GearMesh, MeshSpec};
+use super::hex8::Formulation;
+use crate::gear::{Gear, GearPair};
+use faer::sparse::SparseColMat;
+
+pub struct ClampedGear {
+    pub mesh: GearMesh,
+    pub material: Material,
+    pub formulation: Formulation,
+    /// Free DOFs: every DOF but the bore's.
+    pub dofs: DofMap,
+    pub stiffness: SparseColMat<usize, f64>,
+}
+
+impl ClampedGear {
+    /// Meshes `gear`, clamps its bore and assembles K.
+    pub fn new(pair: &GearPair, gear: &Gear, spec: &MeshSpec, formulation: Formulation) -> Self {
+        let mesh = mesh_gear(pair, gear, spec);
+        let mut clamped = vec![false; mesh.mesh.nodes.len()];
+        for &b in &mesh.bore_nodes {
+            clamped[b] = true;
+        }
+        let dofs = DofMap::new(mesh.mesh.nodes.len(), &clamped);
+        let material = Material::of(pair);
+        let stiffness = assembly::stiffness(&mesh.mesh, &material, formulation, &dofs);
+        ClampedGear { mesh, material, formulation, dofs, stiffness }
+    }
+
+    /// The consistent mass matrix over the same free DOFs.
+    pub fn mass(&self) -> SparseColMat<usize, f64> {
+        assembly::mass(&self.mesh.mesh, &self.material, &self.dofs)
+    }
+}
