@@ -297,7 +297,8 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
         let model = ClampedGear::new(&pair, gear, &mesh_spec, Formulation::IncompatibleModes);
         let (gm, dofs, k, m) = (&model.mesh, &model.dofs, &model.stiffness, model.mass());
         bar.set_message(format!("gear {}: subspace iteration ({} DOFs)", i + 1, dofs.n_free));
-        let modes = eigen::lowest_modes(k, &m, count, 1e-10, 300, |it, converged| {
+        let chol = model.factorize().map_err(anyhow::Error::msg)?;
+        let modes = eigen::lowest_modes_factored(k, &m, &chol, count, 1e-10, 300, |it, converged| {
             bar.set_message(format!("gear {}: subspace iteration {it}, {converged}/{count} converged", i + 1))
         })
         .map_err(anyhow::Error::msg)?;

@@ -4,9 +4,13 @@
 use super::hex8::{self, Formulation};
 use super::mesh::Mesh;
 use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{get_global_parallelism, Conj, Mat, Par, Side};
+use std::sync::Arc;
+
+pub use super::ordering::Ordering;
 use rayon::prelude::*;
 
 /// Linear elastic isotropic material.
@@ -135,7 +139,7 @@ pub fn mul(a: &SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
 /// solved in parallel, one block per thread with a sequential solve each: faer's solve does not
 /// parallelize inside one call (design §4.2).
 pub struct Cholesky {
-    symbolic: SymbolicCholesky<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
     values: Vec<f64>,
     n: usize,
 }
@@ -144,10 +148,29 @@ pub struct Cholesky {
 pub const SOLVE_BLOCK: usize = 64;
 
 impl Cholesky {
+    /// Factorizes K with the AMD ordering.
     pub fn new(k: &SparseColMat<usize, f64>) -> Result<Self, String> {
-        let symbolic =
-            factorize_symbolic_cholesky(k.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-                .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        Self::with_ordering(k, None)
+    }
+
+    /// Factorizes K with a given fill-reducing ordering (e.g. nested dissection), AMD if `None`.
+    pub fn with_ordering(k: &SparseColMat<usize, f64>, ordering: Option<&Ordering>) -> Result<Self, String> {
+        let ord = match ordering {
+            Some(o) => SymmetricOrdering::Custom(PermRef::new_checked(&o.forward, &o.inverse, k.nrows())),
+            None => SymmetricOrdering::Amd,
+        };
+        let symbolic = factorize_symbolic_cholesky(k.symbolic(), Side::Lower, ord, Default::default())
+            .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        Self::numeric(Arc::new(symbolic), k)
+    }
+
+    /// Factorizes another matrix with the same sparsity pattern, reusing this symbolic analysis
+    /// (ordering, elimination tree, supernodes).
+    pub fn refactor(&self, k: &SparseColMat<usize, f64>) -> Result<Self, String> {
+        Self::numeric(self.symbolic.clone(), k)
+    }
+
+    fn numeric(symbolic: Arc<SymbolicCholesky<usize>>, k: &SparseColMat<usize, f64>) -> Result<Self, String> {
         let mut values = vec![0.0; symbolic.len_val()];
         let par = get_global_parallelism();
         let mut buffer = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));

@@ -30,6 +30,16 @@ impl ClampedGear {
         ClampedGear { mesh, material, formulation, dofs, stiffness }
     }
 
+    /// The nested-dissection (METIS) ordering of the free DOFs.
+    pub fn ordering(&self) -> Result<super::ordering::Ordering, String> {
+        super::ordering::nested_dissection(&self.mesh.mesh, &self.dofs)
+    }
+
+    /// Cholesky factor of K with the nested-dissection ordering.
+    pub fn factorize(&self) -> Result<super::assembly::Cholesky, String> {
+        super::assembly::Cholesky::with_ordering(&self.stiffness, Some(&self.ordering()?))
+    }
+
     /// The consistent mass matrix over the same free DOFs.
     pub fn mass(&self) -> SparseColMat<usize, f64> {
         assembly::mass(&self.mesh.mesh, &self.material, &self.dofs)

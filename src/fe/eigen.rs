@@ -57,6 +57,19 @@ pub fn lowest_modes(
     count: usize,
     tolerance: f64,
     max_iterations: usize,
+    progress: impl FnMut(usize, usize),
+) -> Result<Modes, String> {
+    lowest_modes_factored(k, m, &Cholesky::new(k)?, count, tolerance, max_iterations, progress)
+}
+
+/// As [`lowest_modes`], with K's Cholesky factor supplied (e.g. nested-dissection ordered).
+pub fn lowest_modes_factored(
+    k: &SparseColMat<usize, f64>,
+    m: &SparseColMat<usize, f64>,
+    chol: &Cholesky,
+    count: usize,
+    tolerance: f64,
+    max_iterations: usize,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Modes, String> {
     let n = k.nrows();
@@ -64,7 +77,6 @@ pub fn lowest_modes(
     if count == 0 || count > n {
         return Err(format!("cannot compute {count} modes of a {n}-DOF model"));
     }
-    let chol = Cholesky::new(k)?;
     // Start vectors: the diagonal of M (all DOFs excited), then pseudo-random columns.
     let mut seed = 0x2545_f491_4f6c_dd1du64;
     let mut x = Mat::from_fn(n, q, |i, j| {

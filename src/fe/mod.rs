@@ -7,6 +7,7 @@ pub mod eigen;
 pub mod gear_mesh;
 pub mod hex8;
 pub mod mesh;
+pub mod ordering;
 pub mod profile_png;
 pub mod tooth_stiffness;
 pub mod vtk;

@@ -4,7 +4,7 @@
 //! resolves it (a line load is log-singular in elasticity, so this part grows slowly with
 //! refinement; the analytic Hertz term of the PMOR-Hertz method exists to replace it).
 
-use super::assembly::{relative_residual, Cholesky};
+use super::assembly::relative_residual;
 use super::clamped_gear::ClampedGear;
 use super::gear_mesh::{GearMesh, MeshSpec};
 use super::hex8::Formulation;
@@ -68,7 +68,7 @@ pub fn single_tooth_compliance(
     let total_force = 1000.0;
     let load = pitch_line_load(&model.mesh, gear, spec.axial_slices, total_force)?;
     let f = dofs.load_vector(&load);
-    let chol = Cholesky::new(k)?;
+    let chol = model.factorize()?;
     let u = chol.solve(&f);
     let residual = relative_residual(k, &u, &f);
     if residual > 1e-8 {
