@@ -2,7 +2,7 @@
 //! mesh stiffness, the mesh natural frequency √(k̄/m_e), conservation of energy, and the
 //! kinematics of backlash (contact loss, back-flank contact).
 
-use gearfmu::contact::hertz::{Body, LineContact};
+use gearfmu::contact::hertz::{ApproachLaw, Body, LineContact};
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_natural_frequency_hz, LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
 use gearfmu::dynamics::mesh_stiffness::structural_compliance_per_width;
@@ -116,6 +116,7 @@ fn weber_mesh_law_matches_the_single_pair_closed_form_and_stiffens_with_load() {
     let contact = LineContact {
         length_m: p.face_width_m,
         bodies: [body(rho1, depth(&p.gear1, r1)), body(rho2, depth(&p.gear2, r2))],
+        law: ApproachLaw::Weber,
     };
     let teeth = structural_compliance_per_width(&p, u) / p.face_width_m;
     let mut previous_secant = 0.0;

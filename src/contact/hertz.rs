@@ -12,6 +12,13 @@
 //! value is the same in any unit system — unlike the paper's Eq. 20, whose logarithm carries a
 //! length. The relation is monotone while b stays below about hᵢ (∂δ/∂P > 0); [`LineContact::force`]
 //! refuses approaches beyond that range instead of returning a wrong branch.
+//!
+//! The paper's Eq. 20 (Harris & Kotzalas) is kept as [`ApproachLaw::PaperEq20`], made
+//! consistent. As printed, α = 2P/(πl)·Σ(1−νᵢ²)/Eᵢ · ln[πl²/P·(1/R₁+1/R₂)·E*]; with
+//! b² = 4PR/(πlE*) its logarithm's argument is 4l/b², a reciprocal length, so α depends on the
+//! unit system. We multiply it by the one length the method defines, the reference depth h:
+//! α = 2P/(πlE*)·ln(4lh/b²). Unlike Weber's form it depends on the slice length l, i.e. on the
+//! axial mesh — which is what comparing the two shows.
 
 use std::f64::consts::PI;
 
@@ -26,10 +33,21 @@ pub struct Body {
     pub reference_depth_m: f64,
 }
 
+/// The load–approach relation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ApproachLaw {
+    /// Weber, per body, referred to each body's reference depth (dimensionally consistent).
+    #[default]
+    Weber,
+    /// The paper's Eq. 20 with the reference depth as the length its logarithm lacks.
+    PaperEq20,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineContact {
     pub length_m: f64,
     pub bodies: [Body; 2],
+    pub law: ApproachLaw,
 }
 
 impl LineContact {
@@ -53,46 +71,44 @@ impl LineContact {
         2.0 * force_n / (PI * self.half_width(force_n) * self.length_m)
     }
 
-    /// Approach δ(P) of the two reference depths (Weber's form; zero at zero force).
+    /// Both laws are Σᵢ aᵢ·P·(ln(kᵢ/b) − cᵢ) with aᵢ = 2(1−νᵢ²)/(πlEᵢ): per body (aᵢ, kᵢ, cᵢ).
+    /// Weber: kᵢ = 2hᵢ, cᵢ = νᵢ/(2(1−νᵢ)). Eq. 20 made consistent: ln(4lh/b²) = 2 ln(2√(lh)/b),
+    /// so kᵢ = 2√(l·hᵢ), cᵢ = 0, and each aᵢ counts twice.
+    fn terms(&self) -> [(f64, f64, f64); 2] {
+        self.bodies.map(|body| {
+            let nu = body.poisson_ratio;
+            let a = 2.0 * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa);
+            match self.law {
+                ApproachLaw::Weber => (a, 2.0 * body.reference_depth_m, nu / (2.0 * (1.0 - nu))),
+                ApproachLaw::PaperEq20 => (2.0 * a, 2.0 * (self.length_m * body.reference_depth_m).sqrt(), 0.0),
+            }
+        })
+    }
+
+    /// Approach δ(P) of the two reference depths (zero at zero force).
     pub fn hertz_approach(&self, force_n: f64) -> f64 {
         if force_n <= 0.0 {
             return 0.0;
         }
         let b = self.half_width(force_n);
-        self.bodies
-            .iter()
-            .map(|body| {
-                let nu = body.poisson_ratio;
-                2.0 * force_n * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa)
-                    * ((2.0 * body.reference_depth_m / b).ln() - nu / (2.0 * (1.0 - nu)))
-            })
-            .sum()
+        self.terms().iter().map(|&(a, k, c)| a * force_n * ((k / b).ln() - c)).sum()
     }
 
     /// dδ/dP (the contact compliance); infinite at P → 0 (the logarithmic singularity of line
     /// contact), and ≤ 0 beyond the range where the relation is valid.
     pub fn compliance(&self, force_n: f64) -> f64 {
         let b = self.half_width(force_n);
-        self.bodies
-            .iter()
-            .map(|body| {
-                let nu = body.poisson_ratio;
-                2.0 * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa)
-                    * ((2.0 * body.reference_depth_m / b).ln() - nu / (2.0 * (1.0 - nu)) - 0.5)
-            })
-            .sum()
+        self.terms().iter().map(|&(a, k, c)| a * ((k / b).ln() - c - 0.5)).sum()
     }
 
     /// The largest force for which δ(P) is still increasing. With b = β√P the compliance is
-    /// Σ aᵢ(ln(2hᵢ/β) − cᵢ − ½) − ½ ln P · Σ aᵢ, which vanishes at
-    /// ln P* = 2 Σ aᵢ(ln(2hᵢ/β) − cᵢ − ½) / Σ aᵢ.
+    /// Σ aᵢ(ln(kᵢ/β) − cᵢ − ½) − ½ ln P · Σ aᵢ, which vanishes at
+    /// ln P* = 2 Σ aᵢ(ln(kᵢ/β) − cᵢ − ½) / Σ aᵢ.
     pub fn max_valid_force(&self) -> f64 {
         let beta = self.half_width(1.0);
         let (mut weighted, mut total) = (0.0, 0.0);
-        for body in &self.bodies {
-            let nu = body.poisson_ratio;
-            let a = 2.0 * (1.0 - nu * nu) / (PI * self.length_m * body.youngs_modulus_pa);
-            weighted += a * ((2.0 * body.reference_depth_m / beta).ln() - nu / (2.0 * (1.0 - nu)) - 0.5);
+        for (a, k, c) in self.terms() {
+            weighted += a * ((k / beta).ln() - c - 0.5);
             total += a;
         }
         (2.0 * weighted / total).exp()
@@ -148,7 +164,7 @@ mod tests {
             radius_of_curvature_m: r,
             reference_depth_m: 4.7e-3,
         };
-        LineContact { length_m: 0.015, bodies: [body(0.0215), body(0.0318)] }
+        LineContact { length_m: 0.015, bodies: [body(0.0215), body(0.0318)], law: ApproachLaw::Weber }
     }
 
     /// Closed form: b = √(4PR/(πlE*)) and p₀ = 2P/(πbl) (Johnson, Contact Mechanics, Eq. 4.43).
@@ -174,13 +190,34 @@ mod tests {
             b.radius_of_curvature_m *= 1e3;
             b.reference_depth_m *= 1e3;
         }
-        let (d_si, d_mm) = (si.hertz_approach(3125.0), mm.hertz_approach(3125.0));
-        assert!((d_si * 1e3 - d_mm).abs() < 1e-12 * d_mm, "{d_si} m vs {d_mm} mm");
+        for law in [ApproachLaw::Weber, ApproachLaw::PaperEq20] {
+            let (mut si, mut mm) = (si, mm);
+            (si.law, mm.law) = (law, law);
+            let (d_si, d_mm) = (si.hertz_approach(3125.0), mm.hertz_approach(3125.0));
+            assert!((d_si * 1e3 - d_mm).abs() < 1e-12 * d_mm, "{law:?}: {d_si} m vs {d_mm} mm");
+        }
+    }
+
+    /// The consistent Eq. 20 is the printed formula with its logarithm's argument times h:
+    /// 2P/(πlE*)·ln(πl²/P·(1/R)·E*·h), evaluated here literally.
+    #[test]
+    fn paper_eq20_is_the_printed_formula_times_the_reference_depth() {
+        let mut c = steel_pair();
+        c.law = ApproachLaw::PaperEq20;
+        let (p, l, h) = (3125.0, c.length_m, c.bodies[0].reference_depth_m);
+        let (e_star, r) = (c.effective_modulus(), c.effective_radius());
+        let printed = 2.0 * p / (PI * l * e_star) * (PI * l * l / p / r * e_star * h).ln();
+        assert!((c.hertz_approach(p) - printed).abs() < 1e-12 * printed);
     }
 
     #[test]
     fn inverse_round_trips_and_compliance_is_the_derivative() {
-        let c = steel_pair();
+        for law in [ApproachLaw::Weber, ApproachLaw::PaperEq20] {
+            inverse_round_trips_for(LineContact { law, ..steel_pair() });
+        }
+    }
+
+    fn inverse_round_trips_for(c: LineContact) {
         for p in [1.0, 100.0, 3125.0, 2e4] {
             let d = c.hertz_approach(p);
             let back = series_force(&c, 0.0, d).unwrap();

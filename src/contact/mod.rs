@@ -2,3 +2,4 @@
 //! PMOR-Hertz statics later).
 
 pub mod hertz;
+pub mod mesh_kinematics;

@@ -34,6 +34,12 @@ pub fn mesh_stiffness_c_gamma_alpha(pair: &GearPair) -> f64 {
     single_stiffness(pair) * (0.75 * pair.transverse_contact_ratio + 0.25)
 }
 
+/// c_γα at a specific load w = F_t·K_A/b (N/mm): below 100 N/mm ISO 6336-1 (Sect. 9.1, the
+/// note to Eq. 41) scales c′ by (w/100)^0.25 — the contact softens at light load.
+pub fn mesh_stiffness_c_gamma_alpha_at(pair: &GearPair, specific_load_n_per_mm: f64) -> f64 {
+    mesh_stiffness_c_gamma_alpha(pair) * (specific_load_n_per_mm / 100.0).min(1.0).powf(0.25)
+}
+
 /// Converts a stiffness per face width in N/(mm·µm) to a total stiffness in N/m.
 pub fn to_newton_per_metre(c_n_per_mm_um: f64, face_width_m: f64) -> f64 {
     c_n_per_mm_um * 1e6 * face_width_m * 1e3

@@ -25,7 +25,7 @@
 //! S_f in the foundation term — the pair ~22 % softer than ISO 6336-1 for the Kurokawa gears.)
 
 use super::mesh_law::MeshLaw;
-use crate::contact::hertz::{series_force, Body, LineContact};
+use crate::contact::hertz::{series_force, ApproachLaw, Body, LineContact};
 use crate::gear::{Gear, GearPair, HertzContact};
 use rayon::prelude::*;
 
@@ -221,6 +221,7 @@ fn slices_in_contact(
                 contact: LineContact {
                     length_m: length,
                     bodies: [body(rho1, tables.at(&tables.depth_1, u)), body(rho2, tables.at(&tables.depth_2, u))],
+                    law: ApproachLaw::Weber,
                 },
                 structural_compliance: tables.at(&tables.structural, u) / length,
                 linearized_contact_compliance: match pair.hertz_contact {

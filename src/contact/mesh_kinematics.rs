@@ -1,0 +1,356 @@
+//! Where the flanks of a gear pair touch, and how far they penetrate, for given shaft angles:
+//! the contact search of the static analyses (paper Table 2: "max penetration gap on each axial
+//! section").
+//!
+//! Frames. The world's transverse plane has gear 1's axis at O₁ = (0, 0) and gear 2's at
+//! O₂ = (a, 0). Each gear's FE mesh lives in its own frame, in which its mesh sense of rotation
+//! is counter-clockwise (design §3: every angle is positive in its own mesh sense):
+//! - gear 1: X_w = R(θ₁ + γ₁)·X₁;
+//! - gear 2: X_w = O₂ + M·R(θ₂ + γ₂)·X₂ with M = diag(−1, 1), a mirror. It turns gear 2's
+//!   counter-clockwise into the world's clockwise, and it gives gear 2 the opposite hand of helix
+//!   to gear 1 although both are meshed with the same twist — as a mating external pair must be.
+//! γ₁, γ₂ put the reference position of design §3: at θ₁ = θ₂ = 0, tooth 0 of each gear touches
+//! at the operating pitch point, in the mid-plane z = 0.
+//!
+//! Gear 1 drives with its counter-clockwise flanks (side +1), gear 2 is driven on its clockwise
+//! flanks (side −1). Tooth pair j is tooth j mod z₁ with tooth j mod z₂; along the line of action
+//! (LOA) it touches at u = u_C + r_b2·θ₂ + j·p_bt + z·tan β_b (u from T₁, u_C the pitch point).
+//!
+//! Penetration. Two involutes of one base circle are parallel curves: measured along their common
+//! normal (a tangent of the base circle) they are r_b·Δc apart, Δc the difference of their
+//! involute constants c = φ ∓ inv α(r). So the distance of any point to a flank is exact and
+//! cheap. For a pair inside the path of contact the flanks are conjugate and the rigid penetration
+//! is cos β_b·(r_b1·θ₁ − r_b2·θ₂) — the transmission error. Outside it (a pair about to enter or
+//! just leaving), a tip corner can still reach the mating flank once the teeth deflect: the
+//! extended contact that shortens the single-contact zone under load. Each candidate is checked
+//! and the deepest one per pair and axial section is kept.
+
+use super::hertz::{ApproachLaw, Body, LineContact};
+use crate::gear::involute::inv;
+use crate::gear::{Gear, GearPair};
+use std::f64::consts::PI;
+
+/// Which point of which flank touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactKind {
+    /// Conjugate involute contact on the line of action.
+    Conjugate,
+    /// Gear 2's tip corner on gear 1's flank (before the path of contact: engagement).
+    TipOfGear2,
+    /// Gear 1's tip corner on gear 2's flank (after the path of contact: recess).
+    TipOfGear1,
+}
+
+/// One axial section of one tooth pair, at the deepest candidate point.
+#[derive(Debug, Clone, Copy)]
+pub struct SectionContact {
+    pub pair: i64,
+    /// Axial section index (the FE mesh's axial slice) and its mid-plane z (m).
+    pub section: usize,
+    pub z_m: f64,
+    pub kind: ContactKind,
+    /// Teeth (FE tooth indices) of gear 1 and gear 2.
+    pub teeth: [usize; 2],
+    /// Radius of the contact point on each gear's flank.
+    pub radius_m: [f64; 2],
+    /// Rigid-body penetration along the contact normal (m); negative: a gap.
+    pub rigid_penetration_m: f64,
+    /// d(rigid penetration)/d(r_b1·θ₁): how the penetration follows gear 1's rotation; also the
+    /// normal force's moment arm on gear 1 over r_b1 (cos β_b on the line of action).
+    pub arm_ratio: f64,
+    /// Transverse radii of curvature of the two surfaces at the contact (m).
+    pub curvature_radius_m: [f64; 2],
+}
+
+impl SectionContact {
+    /// The Hertz line contact of this section: slice length and radii in the normal plane,
+    /// approach referred to the depth `depth_m` in both bodies.
+    pub fn line_contact(&self, pair: &GearPair, section_length_m: f64, depth_m: f64, law: ApproachLaw) -> LineContact {
+        let cos_bb = pair.base_helix_angle_rad.cos();
+        let body = |rho: f64| Body {
+            youngs_modulus_pa: pair.youngs_modulus_pa,
+            poisson_ratio: pair.poisson_ratio,
+            radius_of_curvature_m: rho / cos_bb,
+            reference_depth_m: depth_m,
+        };
+        LineContact {
+            length_m: section_length_m / cos_bb,
+            bodies: [body(self.curvature_radius_m[0]), body(self.curvature_radius_m[1])],
+            law,
+        }
+    }
+}
+
+/// The pair placed in the world, with the involute constants of its contact flanks.
+#[derive(Debug, Clone)]
+pub struct PairPlacement {
+    pub pair: GearPair,
+    gamma: [f64; 2],
+    /// Involute constant of tooth 0's contact flank at z = 0 (gear 1: φ = c − inv α;
+    /// gear 2: φ = c + inv α).
+    flank_constant: [f64; 2],
+    /// Twist of the transverse section per unit axial length (rad/m), tan β / r.
+    twist: [f64; 2],
+}
+
+fn rot(a: f64, p: [f64; 2]) -> [f64; 2] {
+    let (s, c) = a.sin_cos();
+    [c * p[0] - s * p[1], s * p[0] + c * p[1]]
+}
+
+/// Wraps an angle into (−π/z, π/z].
+fn wrap(angle: f64, teeth: u32) -> f64 {
+    let pitch = 2.0 * PI / teeth as f64;
+    angle - pitch * (angle / pitch).round()
+}
+
+fn pressure_angle_at(gear: &Gear, r: f64) -> f64 {
+    (gear.base_radius_m / r).min(1.0).acos()
+}
+
+impl PairPlacement {
+    pub fn new(pair: &GearPair) -> Self {
+        let alpha_t = pair.transverse_pressure_angle_rad;
+        let cos_w = pair.operating_pressure_angle_rad.cos();
+        let (g1, g2) = (&pair.gear1, &pair.gear2);
+        let psi_w1 = g1.half_thickness_angle(g1.base_radius_m / cos_w, alpha_t);
+        let psi_w2 = g2.half_thickness_angle(g2.base_radius_m / cos_w, alpha_t);
+        let tan_b = pair.helix_angle_rad.tan();
+        PairPlacement {
+            pair: pair.clone(),
+            gamma: [-psi_w1, psi_w2],
+            flank_constant: [
+                g1.half_thickness_angle_pitch_rad + inv(alpha_t),
+                -(g2.half_thickness_angle_pitch_rad + inv(alpha_t)),
+            ],
+            twist: [tan_b / g1.pitch_radius_m, tan_b / g2.pitch_radius_m],
+        }
+    }
+
+    fn gear(&self, i: usize) -> &Gear {
+        if i == 0 {
+            &self.pair.gear1
+        } else {
+            &self.pair.gear2
+        }
+    }
+
+    /// World position of a point given in gear i's own frame (transverse plane).
+    pub fn to_world(&self, i: usize, theta: f64, p: [f64; 2]) -> [f64; 2] {
+        let q = rot(theta + self.gamma[i], p);
+        if i == 0 {
+            q
+        } else {
+            [self.pair.center_distance_m - q[0], q[1]]
+        }
+    }
+
+    /// Gear i's own-frame position of a world point.
+    pub fn to_own(&self, i: usize, theta: f64, w: [f64; 2]) -> [f64; 2] {
+        let q = if i == 0 { w } else { [self.pair.center_distance_m - w[0], w[1]] };
+        rot(-(theta + self.gamma[i]), q)
+    }
+
+    /// Own-frame point of gear i's contact flank on tooth k at radius r, axial z.
+    pub fn flank_point(&self, i: usize, tooth: i64, r: f64, z: f64) -> [f64; 2] {
+        let gear = self.gear(i);
+        let axis = 2.0 * PI * tooth as f64 / gear.teeth as f64 + self.twist[i] * z;
+        let side = if i == 0 { 1.0 } else { -1.0 };
+        let phi = axis + side * gear.half_thickness_angle(r, self.pair.transverse_pressure_angle_rad);
+        [r * phi.cos(), r * phi.sin()]
+    }
+
+    /// Signed distance (m, transverse, along the flank normal; positive outside the tooth) of an
+    /// own-frame point from gear i's contact flank of tooth k at axial z. Exact for involutes.
+    pub fn distance_from_flank(&self, i: usize, tooth: i64, z: f64, p: [f64; 2]) -> f64 {
+        let gear = self.gear(i);
+        let r = p[0].hypot(p[1]);
+        let axis = 2.0 * PI * tooth as f64 / gear.teeth as f64 + self.twist[i] * z;
+        let phi = p[1].atan2(p[0]);
+        let a = pressure_angle_at(gear, r);
+        if i == 0 {
+            gear.base_radius_m * wrap(phi + inv(a) - axis - self.flank_constant[0], gear.teeth)
+        } else {
+            -gear.base_radius_m * wrap(phi - inv(a) - axis - self.flank_constant[1], gear.teeth)
+        }
+    }
+
+    /// Moment arm about O₁ of the line through world point `w` along gear 2's flank normal there
+    /// (for gear 1's tip corner on gear 2's flank).
+    pub fn arm_on_gear1_of_gear2_normal(&self, w: [f64; 2], theta2: f64, tooth2: i64, z: f64) -> f64 {
+        let own = self.to_own(1, theta2, w);
+        let h = 1e-7;
+        let grad = [
+            (self.distance_from_flank(1, tooth2, z, [own[0] + h, own[1]])
+                - self.distance_from_flank(1, tooth2, z, [own[0] - h, own[1]]))
+                / (2.0 * h),
+            (self.distance_from_flank(1, tooth2, z, [own[0], own[1] + h])
+                - self.distance_from_flank(1, tooth2, z, [own[0], own[1] - h]))
+                / (2.0 * h),
+        ];
+        // Gear 2's outward normal in the world (undo the rotation, then the mirror).
+        let n = rot(theta2 + self.gamma[1], grad);
+        let n = [-n[0], n[1]];
+        // The force on gear 1 acts along +n (gear 2 pushes out of its flank); its moment about O₁
+        // against gear 1's (counter-clockwise) mesh sense is −(w × n).
+        -(w[0] * n[1] - w[1] * n[0])
+    }
+
+    /// The contact of tooth pair j in the axial section with mid-plane z, or `None` if no
+    /// candidate point lies on both flanks' active profiles. θ₁, θ₂ are the shaft angles.
+    pub fn section_contact(&self, theta: [f64; 2], j: i64, section: usize, z: f64) -> Option<SectionContact> {
+        let p = &self.pair;
+        let (g1, g2) = (&p.gear1, &p.gear2);
+        let cos_bb = p.base_helix_angle_rad.cos();
+        let teeth = [j.rem_euclid(g1.teeth as i64) as usize, j.rem_euclid(g2.teeth as i64) as usize];
+        let u = p.pitch_point_m()
+            + g2.base_radius_m * theta[1]
+            + j as f64 * p.base_pitch_m
+            + z * p.base_helix_angle_rad.tan();
+        let loa = p.loa_length_m();
+        let form = [g1.form_radius_m.max(g1.base_radius_m), g2.form_radius_m.max(g2.base_radius_m)];
+        let mut best: Option<SectionContact> = None;
+        let mut consider = |c: SectionContact| {
+            if best.map_or(true, |b| c.rigid_penetration_m > b.rigid_penetration_m) {
+                best = Some(c);
+            }
+        };
+        // Conjugate contact on the LOA, inside the path of contact.
+        if (p.path_start_m..=p.path_end_m).contains(&u) {
+            let r2 = g2.base_radius_m.hypot(loa - u);
+            let w = self.to_world(1, theta[1], self.flank_point(1, j, r2, z));
+            let own1 = self.to_own(0, theta[0], w);
+            consider(SectionContact {
+                pair: j,
+                section,
+                z_m: z,
+                kind: ContactKind::Conjugate,
+                teeth,
+                radius_m: [g1.base_radius_m.hypot(u), r2],
+                rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, own1),
+                arm_ratio: cos_bb,
+                curvature_radius_m: [u, loa - u],
+            });
+        }
+        // Gear 2's tip corner on gear 1's flank (the flank normal is tangent to base circle 1,
+        // so the arm on gear 1 is r_b1 exactly).
+        let tip2 = self.to_own(0, theta[0], self.to_world(1, theta[1], self.flank_point(1, j, g2.tip_radius_m, z)));
+        let r = tip2[0].hypot(tip2[1]);
+        if (form[0]..=g1.tip_radius_m).contains(&r) && (u < p.path_start_m) {
+            consider(SectionContact {
+                pair: j,
+                section,
+                z_m: z,
+                kind: ContactKind::TipOfGear2,
+                teeth,
+                radius_m: [r, g2.tip_radius_m],
+                rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, tip2),
+                arm_ratio: cos_bb,
+                curvature_radius_m: [
+                    (r * r - g1.base_radius_m.powi(2)).sqrt(),
+                    (g2.tip_radius_m.powi(2) - g2.base_radius_m.powi(2)).sqrt(),
+                ],
+            });
+        }
+        // Gear 1's tip corner on gear 2's flank.
+        let w1 = self.to_world(0, theta[0], self.flank_point(0, j, g1.tip_radius_m, z));
+        let tip1 = self.to_own(1, theta[1], w1);
+        let r = tip1[0].hypot(tip1[1]);
+        if (form[1]..=g2.tip_radius_m).contains(&r) && (u > p.path_end_m) {
+            consider(SectionContact {
+                pair: j,
+                section,
+                z_m: z,
+                kind: ContactKind::TipOfGear1,
+                teeth,
+                radius_m: [g1.tip_radius_m, r],
+                rigid_penetration_m: -cos_bb * self.distance_from_flank(1, j, z, tip1),
+                arm_ratio: cos_bb * self.arm_on_gear1_of_gear2_normal(w1, theta[1], j, z) / g1.base_radius_m,
+                curvature_radius_m: [
+                    (g1.tip_radius_m.powi(2) - g1.base_radius_m.powi(2)).sqrt(),
+                    (r * r - g2.base_radius_m.powi(2)).sqrt(),
+                ],
+            });
+        }
+        best
+    }
+
+    /// The tooth pairs j that can touch anywhere along the face for θ₂ in one angular pitch
+    /// [0, 2π/z₂), extended contact included (a margin of half a base pitch at both ends).
+    pub fn pairs_in_reach(&self) -> std::ops::RangeInclusive<i64> {
+        let p = &self.pair;
+        let (pb, half_b) = (p.base_pitch_m, 0.5 * p.face_width_m * p.base_helix_angle_rad.tan().abs());
+        let u_c = p.pitch_point_m();
+        let lo = ((p.path_start_m - 0.5 * pb - half_b - u_c) / pb).floor() as i64;
+        let hi = ((p.path_end_m + 0.5 * pb + half_b - u_c - pb) / pb).ceil() as i64;
+        lo..=hi
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gear::PairSpec;
+
+    fn pair(file: &str) -> GearPair {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
+        GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap()
+    }
+
+    /// Closed form: conjugate involutes touch with zero gap at the reference position, and
+    /// the rigid penetration equals cos β_b·(r_b1θ₁ − r_b2θ₂) everywhere on the path of contact.
+    #[test]
+    fn conjugate_penetration_is_the_transmission_error() {
+        for file in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
+            let p = pair(file);
+            let place = PairPlacement::new(&p);
+            let c = place.section_contact([0.0, 0.0], 0, 0, 0.0).unwrap();
+            assert_eq!(c.kind, ContactKind::Conjugate);
+            assert!(c.rigid_penetration_m.abs() < 1e-12, "{file}: {}", c.rigid_penetration_m);
+            let (rb1, rb2) = (p.gear1.base_radius_m, p.gear2.base_radius_m);
+            let cos_bb = p.base_helix_angle_rad.cos();
+            for theta2 in [0.01, 0.05, 0.1] {
+                let te = 3e-6;
+                let theta1 = (rb2 * theta2 + te) / rb1;
+                for j in -2..=2 {
+                    for z in [-0.004, 0.0, 0.005] {
+                        if let Some(c) = place.section_contact([theta1, theta2], j, 0, z) {
+                            if c.kind == ContactKind::Conjugate {
+                                assert!((c.rigid_penetration_m - cos_bb * te).abs() < 1e-10, "{file} j {j}");
+                                let (r1, r2) = (c.radius_m[0], c.radius_m[1]);
+                                let u = (r1 * r1 - rb1 * rb1).sqrt();
+                                assert!((u + (r2 * r2 - rb2 * rb2).sqrt() - p.loa_length_m()).abs() < 1e-9);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Tip-corner contacts meet the conjugate one continuously at the ends of the path of
+    /// contact (A and E), and fall away (a growing gap) outside it.
+    #[test]
+    fn tip_corner_gap_is_continuous_at_the_ends_of_the_path_and_opens_outside() {
+        let p = pair("kurokawa_spur.toml");
+        let place = PairPlacement::new(&p);
+        let rb2 = p.gear2.base_radius_m;
+        let te = 2e-6;
+        let at_u = |u: f64| {
+            let theta2 = (u - p.pitch_point_m()) / rb2;
+            let theta1 = (rb2 * theta2 + te) / p.gear1.base_radius_m;
+            place.section_contact([theta1, theta2], 0, 0, 0.0)
+        };
+        for (end, outside, kind) in
+            [(p.path_start_m, -1.0, ContactKind::TipOfGear2), (p.path_end_m, 1.0, ContactKind::TipOfGear1)]
+        {
+            let near = at_u(end + outside * 1e-7).unwrap();
+            assert_eq!(near.kind, kind);
+            assert!((near.rigid_penetration_m - te).abs() < 1e-8, "{kind:?}: {}", near.rigid_penetration_m);
+            assert!((near.arm_ratio - 1.0).abs() < 1e-4, "{kind:?}: the arm is r_b1 at the ends of the LOA");
+            let far = at_u(end + outside * 0.5e-3).unwrap();
+            let farther = at_u(end + outside * 1.0e-3).unwrap();
+            assert!(far.rigid_penetration_m < te - 1e-7 && farther.rigid_penetration_m < far.rigid_penetration_m);
+        }
+    }
+}

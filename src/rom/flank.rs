@@ -1,0 +1,146 @@
+//! The loadable flank of a gear: the FE flank nodes of the contact side of the teeth that can
+//! mesh, as a structured grid (profile rows × axial layers per tooth), with the two operations
+//! the contact needs on it:
+//! - interpolation of a nodal field at a contact point (bilinear over the flank face);
+//! - the Hertz pressure of an axial section, a semi-ellipse of half-width β across the profile
+//!   and uniform along the section, integrated against the same shape functions into nodal
+//!   load shares (paper Sect. 4.3, Eqs. 21–22).
+
+use crate::fe::gear_mesh::GearMesh;
+
+/// The contact-side flank nodes of some teeth of one gear.
+#[derive(Debug, Clone)]
+pub struct FlankGrid {
+    /// Teeth on the grid (FE tooth indices).
+    pub teeth: Vec<usize>,
+    /// Radii of the flank rows (same on every tooth), ascending.
+    pub row_radius_m: Vec<f64>,
+    /// Axial positions of the node layers, ascending.
+    pub layer_z_m: Vec<f64>,
+    /// Loadable nodes: (FE node, outward unit normal), tooth-major, then row, then layer.
+    pub nodes: Vec<(usize, [f64; 3])>,
+    /// Their transverse position (x, y) in the gear's frame.
+    pub node_xy: Vec<[f64; 2]>,
+}
+
+/// Shares of a unit quantity over loadable nodes: (index into `FlankGrid::nodes`, weight).
+pub type Shares = Vec<(usize, f64)>;
+
+impl FlankGrid {
+    /// The flank nodes of `side` (+1 / −1) on `teeth`.
+    pub fn new(gm: &GearMesh, side: i8, teeth: &[usize]) -> Result<Self, String> {
+        let radius = |n: usize| gm.mesh.nodes[n][0].hypot(gm.mesh.nodes[n][1]);
+        let on_side: Vec<_> = gm.flank_nodes.iter().filter(|f| f.side == side && f.tooth == teeth[0]).collect();
+        let mut rows: Vec<f64> = on_side.iter().map(|f| radius(f.node)).collect();
+        rows.sort_by(f64::total_cmp);
+        rows.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        let layers = on_side.iter().map(|f| f.slice).max().ok_or("the gear mesh has no flank nodes")? + 1;
+        let mut layer_z = vec![0.0; layers];
+        let mut nodes = vec![(usize::MAX, [0.0; 3]); teeth.len() * rows.len() * layers];
+        for f in &gm.flank_nodes {
+            let Some(t) = teeth.iter().position(|&t| t == f.tooth) else { continue };
+            if f.side != side {
+                continue;
+            }
+            let r = radius(f.node);
+            let row = rows.iter().position(|&q| (q - r).abs() < 1e-9).ok_or("flank rows differ between teeth")?;
+            layer_z[f.slice] = gm.mesh.nodes[f.node][2];
+            nodes[(t * rows.len() + row) * layers + f.slice] = (f.node, f.normal);
+        }
+        if nodes.iter().any(|n| n.0 == usize::MAX) {
+            return Err("the flank grid has holes: not a structured gear mesh".into());
+        }
+        let node_xy = nodes.iter().map(|&(n, _)| [gm.mesh.nodes[n][0], gm.mesh.nodes[n][1]]).collect();
+        Ok(FlankGrid { teeth: teeth.to_vec(), row_radius_m: rows, layer_z_m: layer_z, nodes, node_xy })
+    }
+
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    fn index(&self, tooth_slot: usize, row: usize, layer: usize) -> usize {
+        (tooth_slot * self.row_radius_m.len() + row) * self.layer_z_m.len() + layer
+    }
+
+    fn tooth_slot(&self, tooth: usize) -> Option<usize> {
+        self.teeth.iter().position(|&t| t == tooth)
+    }
+
+    /// Row interval and linear weight of a radius (clamped to the flank's extent).
+    fn row_of(&self, r: f64) -> (usize, f64) {
+        let rows = &self.row_radius_m;
+        let i = rows.partition_point(|&q| q <= r).clamp(1, rows.len() - 1) - 1;
+        let t = ((r - rows[i]) / (rows[i + 1] - rows[i])).clamp(0.0, 1.0);
+        (i, t)
+    }
+
+    /// Shares of the point (radius r, mid-plane of axial section `section`) of `tooth`'s flank.
+    pub fn point_shares(&self, tooth: usize, r: f64, section: usize) -> Option<Shares> {
+        let slot = self.tooth_slot(tooth)?;
+        let (row, t) = self.row_of(r);
+        let mut out = Vec::with_capacity(4);
+        for (dr, wr) in [(0, 1.0 - t), (1, t)] {
+            for dl in 0..2 {
+                out.push((self.index(slot, row + dr, section + dl), 0.5 * wr));
+            }
+        }
+        Some(out)
+    }
+
+    /// Shares of the point at radius r on node layer `layer` of `tooth`'s flank.
+    pub fn layer_shares(&self, tooth: usize, r: f64, layer: usize) -> Option<Shares> {
+        let slot = self.tooth_slot(tooth)?;
+        let (row, t) = self.row_of(r);
+        Some(vec![(self.index(slot, row, layer), 1.0 - t), (self.index(slot, row + 1, layer), t)])
+    }
+
+    /// Shares of a Hertz pressure band of half-width β (m, along the profile) centred at radius
+    /// r in axial section `section`. Gauss–Chebyshev quadrature of the second kind integrates the
+    /// semi-ellipse √(1 − s²/β²) against the piecewise-linear profile shape functions.
+    pub fn band_shares(
+        &self,
+        tooth: usize,
+        r: f64,
+        half_width_m: f64,
+        base_radius_m: f64,
+        section: usize,
+    ) -> Option<Shares> {
+        const POINTS: usize = 8;
+        let slot = self.tooth_slot(tooth)?;
+        // Along an involute ds = (r/r_b)·dr: the band's half-width in radius.
+        let dr = half_width_m * base_radius_m / r;
+        let mut out: Shares = Vec::with_capacity(4 * POINTS);
+        let mut total = 0.0;
+        for k in 1..=POINTS {
+            let angle = std::f64::consts::PI * k as f64 / (POINTS + 1) as f64;
+            let w = angle.sin().powi(2);
+            total += w;
+            let (row, t) = self.row_of(r + dr * angle.cos());
+            for (d, wr) in [(0, 1.0 - t), (1, t)] {
+                for dl in 0..2 {
+                    out.push((self.index(slot, row + d, section + dl), 0.5 * w * wr));
+                }
+            }
+        }
+        for s in &mut out {
+            s.1 /= total;
+        }
+        Some(out)
+    }
+
+    /// Unit normal at a point, interpolated from the shares.
+    pub fn normal(&self, shares: &Shares) -> [f64; 3] {
+        let mut n = [0.0; 3];
+        for &(k, w) in shares {
+            for c in 0..3 {
+                n[c] += w * self.nodes[k].1[c];
+            }
+        }
+        let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        n.map(|v| v / norm)
+    }
+}

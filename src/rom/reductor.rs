@@ -1,0 +1,170 @@
+//! Reductors: a clamped gear's FE model in, a reduced model out (plain data, all the static
+//! contact analyses need), plus a reconstructor that lifts reduced coordinates back to FE fields.
+//!
+//! - [`pmor_hertz`] (paper Sect. 4.2): global attachment modes of the loadable flank nodes (local
+//!   deformation removed, the Hertz contact supplies it), compressed by SVD (Algorithm 1) and
+//!   scaled so that the reduced stiffness is the identity.
+//! - [`standard_cms`] (Sect. 4.1, the baseline): one attachment mode per loadable node — the
+//!   static response to a unit load along its normal — so that the reduced statics are exact FE
+//!   statics for any load on those nodes.
+
+use super::attachment::global_attachment_modes;
+use super::flank::{FlankGrid, Shares};
+use super::svd::compress;
+use crate::fe::assembly::{mul, Cholesky, DofMap};
+use crate::fe::clamped_gear::ClampedGear;
+use faer::Mat;
+
+/// A reduced gear: what the static contact solver needs.
+#[derive(Debug, Clone)]
+pub struct ReducedGear {
+    pub flank: FlankGrid,
+    /// Rows of the reduction basis at the loadable nodes: row 3k + c is DOF c of node k
+    /// (`flank.nodes[k]`), columns are the reduced coordinates.
+    pub flank_modes: Mat<f64>,
+    /// Reduced stiffness (n_r × n_r).
+    pub stiffness: Mat<f64>,
+}
+
+/// Lifts reduced coordinates back to the free DOFs of the FE model.
+pub struct Reconstructor {
+    pub basis: Mat<f64>,
+    pub dofs: DofMap,
+}
+
+impl Reconstructor {
+    /// The FE displacement field (all DOFs, node-major) of reduced coordinates q.
+    pub fn displacement(&self, q: &[f64]) -> Vec<f64> {
+        let free: Vec<f64> =
+            (0..self.basis.nrows()).map(|i| (0..q.len()).map(|j| self.basis[(i, j)] * q[j]).sum()).collect();
+        self.dofs.expand(&free)
+    }
+}
+
+/// What the SVD kept (Algorithm 1).
+#[derive(Debug, Clone)]
+pub struct CompressionReport {
+    pub n_c: usize,
+    pub n_sv: usize,
+    pub retained: f64,
+    pub singular_values: Vec<f64>,
+}
+
+impl ReducedGear {
+    pub fn size(&self) -> usize {
+        self.stiffness.ncols()
+    }
+
+    /// The reduced row of a field's projection on `direction` at a point given by its shares:
+    /// Σ w_k·directionᵀ·Ψ_k.
+    pub fn projected_row(&self, shares: &Shares, direction: [f64; 3]) -> Vec<f64> {
+        let mut row = vec![0.0; self.size()];
+        for &(k, w) in shares {
+            for c in 0..3 {
+                let s = w * direction[c];
+                if s != 0.0 {
+                    for (j, v) in row.iter_mut().enumerate() {
+                        *v += s * self.flank_modes[(3 * k + c, j)];
+                    }
+                }
+            }
+        }
+        row
+    }
+
+    /// The reduced load of forces of unit total along each node's inward normal, shared as given.
+    pub fn inward_load_row(&self, shares: &Shares) -> Vec<f64> {
+        let mut row = vec![0.0; self.size()];
+        for &(k, w) in shares {
+            let n = self.flank.nodes[k].1;
+            for c in 0..3 {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v -= w * n[c] * self.flank_modes[(3 * k + c, j)];
+                }
+            }
+        }
+        row
+    }
+}
+
+/// Rows of `basis` at the flank nodes.
+fn flank_rows(basis: &Mat<f64>, dofs: &DofMap, flank: &FlankGrid) -> Mat<f64> {
+    Mat::from_fn(3 * flank.len(), basis.ncols(), |row, j| {
+        let (node, c) = (flank.nodes[row / 3].0, row % 3);
+        dofs.free[3 * node + c].map_or(0.0, |i| basis[(i, j)])
+    })
+}
+
+/// PMOR-Hertz: global attachment modes at depth h, SVD-compressed to the share `p_en` of the
+/// deformation energy, scaled to unit reduced stiffness.
+pub fn pmor_hertz(
+    model: &ClampedGear,
+    factor: &Cholesky,
+    flank: FlankGrid,
+    depth_m: f64,
+    p_en: f64,
+    progress: impl Fn(usize) + Sync,
+) -> Result<(ReducedGear, Reconstructor, CompressionReport), String> {
+    let psi = global_attachment_modes(
+        &model.mesh.mesh,
+        &model.material,
+        model.formulation,
+        &model.dofs,
+        factor,
+        &flank.nodes,
+        depth_m,
+        progress,
+    )?;
+    let c = compress(&model.stiffness, &psi, p_en);
+    // K_sv = Ũᵀ K_r Ũ is diagonal (σ); dividing each column by √σ makes it the identity, which
+    // keeps the reduced coordinates well scaled. The product is formed, not assumed.
+    let mut basis = c.basis;
+    for j in 0..c.n_sv {
+        let s = 1.0 / c.singular_values[j].sqrt();
+        for i in 0..basis.nrows() {
+            basis[(i, j)] *= s;
+        }
+    }
+    let stiffness = reduced_stiffness(&model.stiffness, &basis);
+    let report =
+        CompressionReport { n_c: flank.len(), n_sv: c.n_sv, retained: c.retained, singular_values: c.singular_values };
+    let flank_modes = flank_rows(&basis, &model.dofs, &flank);
+    Ok((ReducedGear { flank, flank_modes, stiffness }, Reconstructor { basis, dofs: model.dofs.clone() }, report))
+}
+
+/// Bᵀ K B.
+fn reduced_stiffness(k: &faer::sparse::SparseColMat<usize, f64>, basis: &Mat<f64>) -> Mat<f64> {
+    let (n, m) = (basis.nrows(), basis.ncols());
+    let mut kb = Mat::zeros(n, m);
+    for j in 0..m {
+        let col: Vec<f64> = (0..n).map(|i| basis[(i, j)]).collect();
+        for (i, v) in mul(k, &col).into_iter().enumerate() {
+            kb[(i, j)] = v;
+        }
+    }
+    let kr = basis.transpose() * &kb;
+    Mat::from_fn(m, m, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]))
+}
+
+/// Standard CMS: ψ = K⁻¹F, one column per loadable node (a unit load along its inward normal).
+/// Then K_CMS = ψᵀKψ = Fᵀψ, read off the flank rows.
+pub fn standard_cms(model: &ClampedGear, factor: &Cholesky, flank: FlankGrid) -> (ReducedGear, Reconstructor) {
+    let n_c = flank.len();
+    let mut basis = Mat::zeros(model.dofs.n_free, n_c);
+    for (j, &(node, normal)) in flank.nodes.iter().enumerate() {
+        for c in 0..3 {
+            if let Some(i) = model.dofs.free[3 * node + c] {
+                basis[(i, j)] = -normal[c];
+            }
+        }
+    }
+    factor.solve_block(&mut basis);
+    let flank_modes = flank_rows(&basis, &model.dofs, &flank);
+    let stiffness = Mat::from_fn(n_c, n_c, |a, b| {
+        let f = |row: usize, col: usize| {
+            -(0..3).map(|c| flank.nodes[row].1[c] * flank_modes[(3 * row + c, col)]).sum::<f64>()
+        };
+        0.5 * (f(a, b) + f(b, a))
+    });
+    (ReducedGear { flank, flank_modes, stiffness }, Reconstructor { basis, dofs: model.dofs.clone() })
+}
