@@ -10,6 +10,7 @@ mod model_description;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
+use gearfmu::contact::hertz::ApproachLaw;
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
 use gearfmu::fe::clamped_gear::ClampedGear;
@@ -19,6 +20,7 @@ use gearfmu::fe::{eigen, vtk};
 use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::interface;
 use gearfmu::model_file::{ModelFile, ModelKind};
+use gearfmu::rom::sweep::{Method, ReducedPair};
 use indicatif::ProgressBar;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -85,6 +87,41 @@ enum Command {
         #[arg(long)]
         vtk: Option<PathBuf>,
     },
+    /// Static transmission error: gear 2 held at N angles over P pitches, torque T₁ on gear 1.
+    Ste {
+        spec: PathBuf,
+        /// Torques on gear 1 (N·m), comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        torque_nm: Vec<f64>,
+        #[arg(long, default_value_t = 41)]
+        angles: usize,
+        #[arg(long, default_value_t = 1.0)]
+        pitches: f64,
+        #[arg(long, value_enum, default_value = "pmor-hertz")]
+        method: StaticMethod,
+        /// PMOR-Hertz: depth h (mm) of the partial model and of the Hertz approach.
+        #[arg(long, default_value_t = 3.0)]
+        depth_mm: f64,
+        /// PMOR-Hertz: share of the deformation energy the SVD keeps (Algorithm 1).
+        #[arg(long, default_value_t = 0.99)]
+        p_en: f64,
+        /// PMOR-Hertz: the paper's Eq. 20 (made consistent) instead of Weber's approach.
+        #[arg(long)]
+        eq20: bool,
+        #[command(flatten)]
+        resolution: Resolution,
+        /// One row per case: method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact
+        #[arg(long)]
+        csv: Option<PathBuf>,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StaticMethod {
+    /// Global attachment modes + SVD, Hertz contact per axial section.
+    PmorHertz,
+    /// The standard PMOR baseline: CMS attachment modes, node-to-surface penalty.
+    Penalty,
 }
 
 /// Overrides of the spec's [mesh] section.
@@ -98,6 +135,66 @@ struct Resolution {
     rim: Option<usize>,
     #[arg(long)]
     slices: Option<usize>,
+}
+
+/// Reduces the pair, runs the sweep (progress on stderr), prints a summary per torque and writes
+/// the CSV.
+fn ste_command(
+    spec: &Path,
+    torques: &[f64],
+    angles: usize,
+    pitches: f64,
+    method: Method,
+    resolution: Resolution,
+    csv: Option<PathBuf>,
+) -> Result<()> {
+    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
+    let started = std::time::Instant::now();
+    let bar = ProgressBar::new_spinner();
+    bar.set_message("reducing both gears");
+    let reduced = ReducedPair::build(&pair, &mesh_spec, method, |gear, done| {
+        bar.set_message(format!("gear {}: {done} partial models", gear + 1))
+    })
+    .map_err(anyhow::Error::msg)?;
+    let offline = started.elapsed().as_secs_f64();
+    if let Some(reports) = &reduced.compression {
+        for (i, r) in reports.iter().enumerate() {
+            println!("gear {}: {} loadable nodes → n_sv {} (retained {:.4})", i + 1, r.n_c, r.n_sv, r.retained);
+        }
+    }
+    bar.set_message(format!("{} static cases", angles * torques.len()));
+    let sweep_start = std::time::Instant::now();
+    let cases: Vec<_> =
+        reduced.sweep(torques, angles, pitches).into_iter().collect::<Result<_, _>>().map_err(anyhow::Error::msg)?;
+    let sweep = sweep_start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let name = match method {
+        Method::PmorHertz { .. } => "pmor-hertz",
+        Method::Penalty { .. } => "penalty",
+    };
+    for &t in torques {
+        let ste: Vec<f64> = cases.iter().filter(|c| c.torque_nm == t).map(|c| c.ste_m * 1e6).collect();
+        let mean = ste.iter().sum::<f64>() / ste.len() as f64;
+        let (lo, hi) = ste.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        println!("{name} T₁ {t} N·m: mean STE {mean:.3} µm, peak-to-peak {:.3} µm", hi - lo);
+    }
+    println!(
+        "reduction {offline:.2} s; {} cases in {sweep:.2} s ({:.3} s per case on {} threads)",
+        cases.len(),
+        sweep / cases.len() as f64 * rayon::current_num_threads() as f64,
+        rayon::current_num_threads()
+    );
+    if let Some(path) = csv {
+        let mut out = String::from("method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact\n");
+        for c in &cases {
+            out += &format!(
+                "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{}\n",
+                c.torque_nm, c.theta_rad[0], c.theta_rad[1], c.ste_m, c.mesh_force_n, c.pairs_in_contact
+            );
+        }
+        std::fs::write(&path, out).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
 }
 
 fn load_pair(spec: &Path) -> Result<GearPair> {
@@ -385,6 +482,17 @@ fn main() {
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),
         Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
+        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv } => {
+            let method = match method {
+                StaticMethod::PmorHertz => Method::PmorHertz {
+                    depth_m: depth_mm * 1e-3,
+                    p_en,
+                    law: if eq20 { ApproachLaw::PaperEq20 } else { ApproachLaw::Weber },
+                },
+                StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
+            };
+            ste_command(&spec, &torque_nm, angles, pitches, method, resolution, csv)
+        }
     };
     if let Err(e) = result {
         eprintln!("fmu-build: error: {e:#}");

@@ -6,3 +6,4 @@ pub mod flank;
 pub mod reductor;
 pub mod statics;
 pub mod svd;
+pub mod sweep;

@@ -1,0 +1,95 @@
+//! Sweeps of static contact analyses over gear 2's angle × torque (paper Sect. 6.1): the pair is
+//! reduced once (both gears, the contact-side flanks of every tooth that can mesh in one pitch),
+//! then the cases run in parallel.
+
+use super::flank::FlankGrid;
+use super::reductor::{pmor_hertz, standard_cms, CompressionReport, ReducedGear};
+use super::statics::{ContactModel, StaticCase, StaticModel};
+use crate::contact::mesh_kinematics::PairPlacement;
+use crate::fe::clamped_gear::ClampedGear;
+use crate::fe::gear_mesh::MeshSpec;
+use crate::fe::hex8::Formulation;
+use crate::gear::GearPair;
+use rayon::prelude::*;
+
+/// Which reduction and contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    /// Global attachment modes at depth h, SVD to share p_en, Hertz sections.
+    PmorHertz { depth_m: f64, p_en: f64, law: crate::contact::hertz::ApproachLaw },
+    /// Attachment modes of every loadable node, node-to-surface penalty (factor × ISO c_γα).
+    Penalty { factor: f64 },
+}
+
+/// Both gears reduced for one method.
+pub struct ReducedPair {
+    pub pair: GearPair,
+    pub gears: [ReducedGear; 2],
+    pub method: Method,
+    /// What the SVD kept per gear (PMOR-Hertz only).
+    pub compression: Option<[CompressionReport; 2]>,
+}
+
+impl ReducedPair {
+    /// Meshes, clamps and reduces both gears; `progress(gear, nodes done)` reports the partial
+    /// models of the global attachment modes.
+    pub fn build(
+        pair: &GearPair,
+        mesh: &MeshSpec,
+        method: Method,
+        progress: impl Fn(usize, usize) + Sync,
+    ) -> Result<Self, String> {
+        let place = PairPlacement::new(pair);
+        let mut gears = Vec::new();
+        let mut reports = Vec::new();
+        for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+            let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
+            let factor = model.factorize()?;
+            let z = gear.teeth as i64;
+            let mut teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
+            teeth.dedup();
+            let side = if i == 0 { 1 } else { -1 };
+            let grid = FlankGrid::new(&model.mesh, side, &teeth)?;
+            match method {
+                Method::PmorHertz { depth_m, p_en, .. } => {
+                    let (reduced, _, report) = pmor_hertz(&model, &factor, grid, depth_m, p_en, |n| progress(i, n))?;
+                    gears.push(reduced);
+                    reports.push(report);
+                }
+                Method::Penalty { .. } => gears.push(standard_cms(&model, &factor, grid).0),
+            }
+        }
+        let gears: [ReducedGear; 2] = gears.try_into().map_err(|_| "two gears")?;
+        let compression = reports.try_into().ok();
+        Ok(ReducedPair { pair: pair.clone(), gears, method, compression })
+    }
+
+    pub fn static_model(&self) -> StaticModel<'_> {
+        let contact = match self.method {
+            Method::PmorHertz { depth_m, law, .. } => ContactModel::Hertz { law, depth_m },
+            Method::Penalty { factor } => ContactModel::Penalty { factor },
+        };
+        StaticModel::new(&self.pair, [&self.gears[0], &self.gears[1]], contact)
+    }
+
+    /// Cases at `angles` positions of gear 2 spread over `pitches` angular pitches (starting at
+    /// the reference position, half a step in), for each torque; parallel over cases. Positions
+    /// beyond the first pitch use the tooth periodicity of the mesh (exact).
+    pub fn sweep(&self, torques_nm: &[f64], angles: usize, pitches: f64) -> Vec<Result<StaticCase, String>> {
+        let model = self.static_model();
+        let pitch = 2.0 * std::f64::consts::PI / self.pair.gear2.teeth as f64;
+        let jobs: Vec<(f64, f64)> = torques_nm
+            .iter()
+            .flat_map(|&t| (0..angles).map(move |k| (t, pitches * pitch * (k as f64 + 0.5) / angles as f64)))
+            .collect();
+        jobs.par_iter()
+            .map(|&(torque, theta2)| {
+                let periods = (theta2 / pitch).floor();
+                let mut case = model.solve(theta2 - periods * pitch, torque)?;
+                let (rb1, rb2) = (self.pair.gear1.base_radius_m, self.pair.gear2.base_radius_m);
+                case.theta_rad = [(rb2 * theta2 + case.ste_m) / rb1, theta2];
+                Ok(case)
+            })
+            .collect()
+    }
+}
