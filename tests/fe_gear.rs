@@ -120,3 +120,46 @@ fn flank_normals_are_tangent_to_the_base_circle() {
         }
     }
 }
+
+/// The hand of helix, closed form of the lead: along the face, every flank node of a helical
+/// gear turns about the axis by s·tan β/r_p per metre (s = +1 right hand, −1 left), gear 2
+/// with the hand opposite to the spec's gear 1; and the flank normal is perpendicular to that
+/// helix through the node.
+#[test]
+fn helical_mesh_twists_by_the_lead_in_the_sense_of_its_hand() {
+    use gearfmu::gear::spec::HelixHand;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join("kurokawa_helical.toml");
+    for hand in [HelixHand::Right, HelixHand::Left] {
+        let mut spec = PairSpec::load(&path).unwrap();
+        spec.rack.helix_hand = hand;
+        let p = GearPair::from_spec(&spec).unwrap();
+        assert_eq!(p.gear1.helix_hand, hand);
+        assert_eq!(p.gear2.helix_hand, hand.opposite());
+        for gear in [&p.gear1, &p.gear2] {
+            let rate = gear.helix_hand.sign() * p.helix_angle_rad.tan() / gear.pitch_radius_m;
+            let gm = mesh_gear(&p, gear, &MeshSpec::default());
+            let at = |n: usize| gm.mesh.nodes[n];
+            let flank: Vec<_> = gm.flank_nodes.iter().filter(|f| f.tooth == 0 && f.side == 1).collect();
+            let mut checked = 0;
+            for f in &flank {
+                let x = at(f.node);
+                // The same profile row in slice 0: same radius.
+                let r = x[0].hypot(x[1]);
+                let base = flank
+                    .iter()
+                    .map(|g| at(g.node))
+                    .filter(|y| (y[0].hypot(y[1]) - r).abs() < 1e-12)
+                    .min_by(|a, b| a[2].total_cmp(&b[2]))
+                    .unwrap();
+                let turned = x[1].atan2(x[0]) - base[1].atan2(base[0]);
+                assert!((turned - rate * (x[2] - base[2])).abs() < 1e-12, "{hand:?} z {}: turned {turned}", gear.teeth);
+                // Helix tangent through the node: d/dz of (r cos φ, r sin φ, z) with dφ/dz = rate.
+                let t = [-x[1] * rate, x[0] * rate, 1.0];
+                let n = f.normal;
+                assert!((n[0] * t[0] + n[1] * t[1] + n[2] * t[2]).abs() < 1e-6, "normal not on the flank");
+                checked += 1;
+            }
+            assert!(checked > 20);
+        }
+    }
+}

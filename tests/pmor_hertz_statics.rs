@@ -45,8 +45,7 @@ fn reduce(p: &GearPair) -> ([ReducedGear; 2], [ReducedGear; 2]) {
         let factor = model.factorize().unwrap();
         let z = gear.teeth as i64;
         let teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
-        let side = if i == 0 { 1 } else { -1 };
-        let grid = FlankGrid::new(&model.mesh, side, &teeth).unwrap();
+        let grid = FlankGrid::contact_flank(&model.mesh, i, &teeth).unwrap();
         let (reduced, _, report) = pmor_hertz(&model, &factor, grid.clone(), 3e-3, 0.999, |_| {}).unwrap();
         println!("gear {}: n_c {} → n_sv {} (retained {:.4})", i + 1, report.n_c, report.n_sv, report.retained);
         hertz.push(reduced);

@@ -113,6 +113,11 @@ enum Command {
         /// One row per case: method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// STE (µm) against θ₂, one curve per torque, contact zones marked. Drawn by
+        /// scripts/plot_ste.py with matplotlib: the Python of $GEARFMU_PYTHON, else .venv/bin/python
+        /// (scripts/setup.sh makes it), else python3.
+        #[arg(long)]
+        png: Option<PathBuf>,
     },
 }
 
@@ -146,7 +151,7 @@ fn ste_command(
     pitches: f64,
     method: Method,
     resolution: Resolution,
-    csv: Option<PathBuf>,
+    out: StePlots,
 ) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     let started = std::time::Instant::now();
@@ -184,15 +189,67 @@ fn ste_command(
         sweep / cases.len() as f64 * rayon::current_num_threads() as f64,
         rayon::current_num_threads()
     );
-    if let Some(path) = csv {
-        let mut out = String::from("method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact\n");
-        for c in &cases {
-            out += &format!(
-                "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{}\n",
-                c.torque_nm, c.theta_rad[0], c.theta_rad[1], c.ste_m, c.mesh_force_n, c.pairs_in_contact
-            );
+    let mut table = String::from("method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact\n");
+    for c in &cases {
+        table += &format!(
+            "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{}\n",
+            c.torque_nm, c.theta_rad[0], c.theta_rad[1], c.ste_m, c.mesh_force_n, c.pairs_in_contact
+        );
+    }
+    if let Some(path) = &out.csv {
+        std::fs::write(path, &table).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(png) = &out.png {
+        let csv = match &out.csv {
+            Some(path) => path.clone(),
+            None => {
+                let path = png.with_extension("csv");
+                std::fs::write(&path, &table).with_context(|| format!("cannot write {}", path.display()))?;
+                path
+            }
+        };
+        plot_ste(&csv, png, &format!("{}: static transmission error, {name}", pair.name))?;
+    }
+    Ok(())
+}
+
+/// Where `ste` writes its table and its plot.
+struct StePlots {
+    csv: Option<PathBuf>,
+    png: Option<PathBuf>,
+}
+
+/// The plotting script, carried in the binary so that `fmu-build ste --png` works from any folder.
+const PLOT_STE_PY: &str = include_str!("../../scripts/plot_ste.py");
+
+/// Runs scripts/plot_ste.py (fed on stdin) on a CSV of `ste`.
+fn plot_ste(csv: &Path, png: &Path, title: &str) -> Result<()> {
+    let python = std::env::var_os("GEARFMU_PYTHON").map(PathBuf::from).unwrap_or_else(|| {
+        let venv = PathBuf::from(".venv/bin/python");
+        if venv.exists() {
+            venv
+        } else {
+            PathBuf::from("python3")
         }
-        std::fs::write(&path, out).with_context(|| format!("cannot write {}", path.display()))?;
+    });
+    let mut child = std::process::Command::new(&python)
+        .arg("-")
+        .arg(csv)
+        .arg("--png")
+        .arg(png)
+        .arg("--title")
+        .arg(title)
+        .stdin(std::process::Stdio::piped())
+        .spawn()
+        .with_context(|| format!("--png needs Python with matplotlib; cannot run {}", python.display()))?;
+    child.stdin.take().context("python's stdin")?.write_all(PLOT_STE_PY.as_bytes())?;
+    let status = child.wait()?;
+    if !status.success() {
+        anyhow::bail!(
+            "{} could not draw {} ({status}); --png needs matplotlib (scripts/setup.sh makes .venv, or set GEARFMU_PYTHON)",
+            python.display(),
+            png.display()
+        );
     }
     Ok(())
 }
@@ -482,7 +539,7 @@ fn main() {
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),
         Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
-        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv } => {
+        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => {
             let method = match method {
                 StaticMethod::PmorHertz => Method::PmorHertz {
                     depth_m: depth_mm * 1e-3,
@@ -491,7 +548,7 @@ fn main() {
                 },
                 StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
             };
-            ste_command(&spec, &torque_nm, angles, pitches, method, resolution, csv)
+            ste_command(&spec, &torque_nm, angles, pitches, method, resolution, StePlots { csv, png })
         }
     };
     if let Err(e) = result {

@@ -6,15 +6,19 @@
 //! O₂ = (a, 0). Each gear's FE mesh lives in its own frame, in which its mesh sense of rotation
 //! is counter-clockwise (design §3: every angle is positive in its own mesh sense):
 //! - gear 1: X_w = R(θ₁ + γ₁)·X₁;
-//! - gear 2: X_w = O₂ + M·R(θ₂ + γ₂)·X₂ with M = diag(−1, 1), a mirror. It turns gear 2's
-//!   counter-clockwise into the world's clockwise, and it gives gear 2 the opposite hand of helix
-//!   to gear 1 although both are meshed with the same twist — as a mating external pair must be.
+//! - gear 2: X_w = O₂ + M·R(θ₂ + γ₂)·X₂ with M = diag(−1, 1, −1): gear 2 is turned over, a half
+//!   turn about the world's y axis. In the transverse plane M acts as the mirror x → −x, which
+//!   turns gear 2's counter-clockwise into the world's clockwise; along the axis it maps gear 2's
+//!   own z to −z. Being a rotation, it keeps each gear's hand of helix: gear 1 has the spec's hand,
+//!   gear 2 the opposite one, both meshed as such (`fe::gear_mesh`). In world z both transverse
+//!   sections then turn the same way, s·tan β/r per metre (s = +1 when gear 1 is right-handed).
 //! γ₁, γ₂ put the reference position of design §3: at θ₁ = θ₂ = 0, tooth 0 of each gear touches
 //! at the operating pitch point, in the mid-plane z = 0.
 //!
 //! Gear 1 drives with its counter-clockwise flanks (side +1), gear 2 is driven on its clockwise
 //! flanks (side −1). Tooth pair j is tooth j mod z₁ with tooth j mod z₂; along the line of action
-//! (LOA) it touches at u = u_C + r_b2·θ₂ + j·p_bt + z·tan β_b (u from T₁, u_C the pitch point).
+//! (LOA) it touches at u = u_C + r_b2·θ₂ + j·p_bt + s·z·tan β_b (u from T₁, u_C the pitch point,
+//! z the world's axial coordinate).
 //!
 //! Penetration. Two involutes of one base circle are parallel curves: measured along their common
 //! normal (a tangent of the base circle) they are r_b·Δc apart, Δc the difference of their
@@ -89,8 +93,11 @@ pub struct PairPlacement {
     /// Involute constant of tooth 0's contact flank at z = 0 (gear 1: φ = c − inv α;
     /// gear 2: φ = c + inv α).
     flank_constant: [f64; 2],
-    /// Twist of the transverse section per unit axial length (rad/m), tan β / r.
+    /// Twist of each gear's transverse section per unit of world axial length (rad/m),
+    /// s·tan β / r: gear 2's own twist is −s·tan β / r₂ along its own z = −z.
     twist: [f64; 2],
+    /// s = +1 if gear 1 is right-handed, −1 if left-handed.
+    hand: f64,
 }
 
 fn rot(a: f64, p: [f64; 2]) -> [f64; 2] {
@@ -116,6 +123,8 @@ impl PairPlacement {
         let psi_w1 = g1.half_thickness_angle(g1.base_radius_m / cos_w, alpha_t);
         let psi_w2 = g2.half_thickness_angle(g2.base_radius_m / cos_w, alpha_t);
         let tan_b = pair.helix_angle_rad.tan();
+        let hand = g1.helix_hand.sign();
+        debug_assert_eq!(g2.helix_hand, g1.helix_hand.opposite());
         PairPlacement {
             pair: pair.clone(),
             gamma: [-psi_w1, psi_w2],
@@ -123,7 +132,8 @@ impl PairPlacement {
                 g1.half_thickness_angle_pitch_rad + inv(alpha_t),
                 -(g2.half_thickness_angle_pitch_rad + inv(alpha_t)),
             ],
-            twist: [tan_b / g1.pitch_radius_m, tan_b / g2.pitch_radius_m],
+            twist: [hand * tan_b / g1.pitch_radius_m, -g2.helix_hand.sign() * tan_b / g2.pitch_radius_m],
+            hand,
         }
     }
 
@@ -151,7 +161,7 @@ impl PairPlacement {
         rot(-(theta + self.gamma[i]), q)
     }
 
-    /// Own-frame point of gear i's contact flank on tooth k at radius r, axial z.
+    /// Own-frame transverse point of gear i's contact flank on tooth k at radius r, world axial z.
     pub fn flank_point(&self, i: usize, tooth: i64, r: f64, z: f64) -> [f64; 2] {
         let gear = self.gear(i);
         let axis = 2.0 * PI * tooth as f64 / gear.teeth as f64 + self.twist[i] * z;
@@ -206,7 +216,7 @@ impl PairPlacement {
         let u = p.pitch_point_m()
             + g2.base_radius_m * theta[1]
             + j as f64 * p.base_pitch_m
-            + z * p.base_helix_angle_rad.tan();
+            + self.hand * z * p.base_helix_angle_rad.tan();
         let loa = p.loa_length_m();
         let form = [g1.form_radius_m.max(g1.base_radius_m), g2.form_radius_m.max(g2.base_radius_m)];
         let mut best: Option<SectionContact> = None;
@@ -290,19 +300,34 @@ impl PairPlacement {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gear::spec::HelixHand;
     use crate::gear::PairSpec;
 
-    fn pair(file: &str) -> GearPair {
+    fn pair_with_hand(file: &str, hand: HelixHand) -> GearPair {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
-        GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap()
+        let mut spec = PairSpec::load(&path).unwrap();
+        spec.rack.helix_hand = hand;
+        GearPair::from_spec(&spec).unwrap()
+    }
+
+    fn pair(file: &str) -> GearPair {
+        pair_with_hand(file, HelixHand::Right)
     }
 
     /// Closed form: conjugate involutes touch with zero gap at the reference position, and
     /// the rigid penetration equals cos β_b·(r_b1θ₁ − r_b2θ₂) everywhere on the path of contact.
+    /// The contact point (gear 2's flank point placed in the world) lies on the line of action
+    /// at u = u_C + r_b2·θ₂ + j·p_bt ± z·tan β_b, at radius √(r_b1² + u²) from O₁: this checks the
+    /// axial term, the twist and the hand of both gears.
     #[test]
     fn conjugate_penetration_is_the_transmission_error() {
-        for file in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
-            let p = pair(file);
+        let cases = [
+            ("kurokawa_spur.toml", HelixHand::Right),
+            ("kurokawa_helical.toml", HelixHand::Right),
+            ("kurokawa_helical.toml", HelixHand::Left),
+        ];
+        for (file, hand) in cases {
+            let p = pair_with_hand(file, hand);
             let place = PairPlacement::new(&p);
             let c = place.section_contact([0.0, 0.0], 0, 0, 0.0).unwrap();
             assert_eq!(c.kind, ContactKind::Conjugate);
@@ -320,6 +345,11 @@ mod tests {
                                 let (r1, r2) = (c.radius_m[0], c.radius_m[1]);
                                 let u = (r1 * r1 - rb1 * rb1).sqrt();
                                 assert!((u + (r2 * r2 - rb2 * rb2).sqrt() - p.loa_length_m()).abs() < 1e-9);
+                                let w = place.to_world(1, theta2, place.flank_point(1, j, r2, z));
+                                assert!(
+                                    (w[0].hypot(w[1]) - r1).abs() < 1e-9,
+                                    "{file} {hand:?} j {j} z {z}: off the LOA"
+                                );
                             }
                         }
                     }

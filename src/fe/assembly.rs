@@ -135,8 +135,10 @@ pub fn mul(a: &SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
     y
 }
 
-/// A sparse Cholesky factorization K = LLᵀ (faer, AMD ordering). Blocks of right-hand sides are
-/// solved in parallel, one block per thread with a sequential solve each: faer's solve does not
+/// A sparse Cholesky factorization K = LLᵀ (faer, supernodal), with a fill-reducing ordering:
+/// the clamped gear passes METIS nested dissection (`ClampedGear::ordering`), AMD is the
+/// fallback. The symbolic part is kept so that `refactor` reuses it for a new K of the same
+/// pattern. Blocks of right-hand sides are solved in parallel, one block per thread with a sequential solve each: faer's solve does not
 /// parallelize inside one call (design §4.2).
 pub struct Cholesky {
     symbolic: Arc<SymbolicCholesky<usize>>,

@@ -132,7 +132,9 @@ pub fn mesh_gear(pair: &GearPair, gear: &Gear, spec: &MeshSpec) -> GearMesh {
     let per_sector = sec.body.len() + sec.tooth.len();
     let per_layer = z * per_sector;
     let b = pair.face_width_m;
-    let twist = |zc: f64| zc * pair.helix_angle_rad.tan() / gear.pitch_radius_m;
+    // The transverse profile turns with z by the lead: tan β / r rad per metre, in the sense of
+    // the gear's hand of helix.
+    let twist = |zc: f64| zc * gear.helix_hand.sign() * pair.helix_angle_rad.tan() / gear.pitch_radius_m;
 
     let body_id = |l: usize, k: usize, i: usize, j: usize| {
         let (k, j) = if j == sec.body_columns { ((k + 1) % z, 0) } else { (k, j) };
@@ -233,7 +235,7 @@ fn flank_normal(pair: &GearPair, gear: &Gear, alpha_t: f64, r: f64, side: i8, po
     let s = side as f64;
     let phi_at = |rr: f64| s * gear.profile_half_thickness_angle(rr, alpha_t);
     let base_angle = point[1].atan2(point[0]) - phi_at(r);
-    let twist_rate = pair.helix_angle_rad.tan() / gear.pitch_radius_m;
+    let twist_rate = gear.helix_hand.sign() * pair.helix_angle_rad.tan() / gear.pitch_radius_m;
     let surface = |rr: f64, dz: f64| {
         let a = base_angle + phi_at(rr) + twist_rate * dz;
         [rr * a.cos(), rr * a.sin(), point[2] + dz]

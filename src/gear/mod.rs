@@ -31,6 +31,8 @@ pub struct Gear {
     /// The trochoidal root fillet as (radius, half tooth-thickness angle), root circle upwards.
     pub fillet: Vec<(f64, f64)>,
     pub inertia_kgm2: f64,
+    /// Hand of the helix (gear 1's from the spec, gear 2's the opposite one).
+    pub helix_hand: spec::HelixHand,
 }
 
 impl Gear {
@@ -204,7 +206,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let mt = mn / beta.cos();
     let beta_b = (beta.tan() * alpha_t.cos()).atan();
 
-    let gear = |which: &str, g: &spec::GearSpec| -> Result<Gear, SpecError> {
+    let gear = |which: &str, g: &spec::GearSpec, helix_hand: spec::HelixHand| -> Result<Gear, SpecError> {
         if g.teeth <= 0 {
             return Err(invalid(&format!("{which}.teeth"), "must be a positive integer"));
         }
@@ -273,13 +275,14 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
                 g.teeth as u32,
             ),
             inertia_kgm2: 0.0,
+            helix_hand,
         };
         // Polar moment of inertia of the real section (fillet + involute), unless overridden.
         gear.inertia_kgm2 = inertia_override.unwrap_or(rho * b * gear.section_moments(alpha_t).1);
         Ok(gear)
     };
-    let g1 = gear("gear1", &spec.gear1)?;
-    let g2 = gear("gear2", &spec.gear2)?;
+    let g1 = gear("gear1", &spec.gear1, rack.helix_hand)?;
+    let g2 = gear("gear2", &spec.gear2, rack.helix_hand.opposite())?;
 
     // Operating center distance and pressure angle.
     let (z1, z2) = (g1.teeth as f64, g2.teeth as f64);

@@ -21,12 +21,31 @@ pub(crate) fn invalid(field: &str, rule: impl Into<String>) -> SpecError {
     SpecError::Invalid { field: field.to_string(), rule: rule.into() }
 }
 
-/// Hand of helix; irrelevant for spur gears (helix angle 0).
+/// Hand of helix; irrelevant for spur gears (helix angle 0). The spec gives gear 1's hand; an
+/// external pair meshes only with opposite hands, so gear 2 has the other one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum HelixHand {
     Left,
     Right,
+}
+
+impl HelixHand {
+    /// +1 for a right hand: like a right-hand screw, the tooth trace turns counter-clockwise
+    /// about +z (the gear's axis in its own frame) as z grows; −1 for a left hand.
+    pub fn sign(self) -> f64 {
+        match self {
+            HelixHand::Right => 1.0,
+            HelixHand::Left => -1.0,
+        }
+    }
+
+    pub fn opposite(self) -> Self {
+        match self {
+            HelixHand::Right => HelixHand::Left,
+            HelixHand::Left => HelixHand::Right,
+        }
+    }
 }
 
 /// One gear of the pair (gear 1 = pinion/driver, gear 2 = wheel/driven).

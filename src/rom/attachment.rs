@@ -89,7 +89,10 @@ pub fn partial_response(
     }
     for &(n, _) in load {
         if on_section[n] || !in_partial[n] {
-            return Err(format!("loaded node {n} is not free inside the partial model (h too small)"));
+            return Err(format!(
+                "loaded node {n} lies on the clamped section of its partial model: the depth h = {:.2} mm does not reach past the flank elements; raise h or refine the mesh",
+                depth_m * 1e3
+            ));
         }
     }
     let dofs = DofMap::new(sub.nodes.len(), &clamped);

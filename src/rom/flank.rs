@@ -15,7 +15,7 @@ pub struct FlankGrid {
     pub teeth: Vec<usize>,
     /// Radii of the flank rows (same on every tooth), ascending.
     pub row_radius_m: Vec<f64>,
-    /// Axial positions of the node layers, ascending.
+    /// Axial positions of the node layers in the pair's world frame, ascending.
     pub layer_z_m: Vec<f64>,
     /// Loadable nodes: (FE node, outward unit normal), tooth-major, then row, then layer.
     pub nodes: Vec<(usize, [f64; 3])>,
@@ -27,8 +27,20 @@ pub struct FlankGrid {
 pub type Shares = Vec<(usize, f64)>;
 
 impl FlankGrid {
-    /// The flank nodes of `side` (+1 / −1) on `teeth`.
-    pub fn new(gm: &GearMesh, side: i8, teeth: &[usize]) -> Result<Self, String> {
+    /// The contact flank of gear `gear` of a pair (0: gear 1, 1: gear 2) on `teeth`, placed as
+    /// `contact::mesh_kinematics` places the pair: gear 1 touches with its side +1 and keeps
+    /// its axial coordinate; gear 2 touches with its side −1 and is turned over, so its own z is
+    /// the world's −z and its layers come in reverse order.
+    pub fn contact_flank(gm: &GearMesh, gear: usize, teeth: &[usize]) -> Result<Self, String> {
+        match gear {
+            0 => Self::new(gm, 1, teeth, false),
+            1 => Self::new(gm, -1, teeth, true),
+            _ => Err(format!("a gear pair has gears 0 and 1, not {gear}")),
+        }
+    }
+
+    /// The flank nodes of `side` (+1 / −1) on `teeth`; `turned_over`: world z = −own z.
+    pub fn new(gm: &GearMesh, side: i8, teeth: &[usize], turned_over: bool) -> Result<Self, String> {
         let radius = |n: usize| gm.mesh.nodes[n][0].hypot(gm.mesh.nodes[n][1]);
         let on_side: Vec<_> = gm.flank_nodes.iter().filter(|f| f.side == side && f.tooth == teeth[0]).collect();
         let mut rows: Vec<f64> = on_side.iter().map(|f| radius(f.node)).collect();
@@ -44,8 +56,9 @@ impl FlankGrid {
             }
             let r = radius(f.node);
             let row = rows.iter().position(|&q| (q - r).abs() < 1e-9).ok_or("flank rows differ between teeth")?;
-            layer_z[f.slice] = gm.mesh.nodes[f.node][2];
-            nodes[(t * rows.len() + row) * layers + f.slice] = (f.node, f.normal);
+            let (layer, z_sign) = if turned_over { (layers - 1 - f.slice, -1.0) } else { (f.slice, 1.0) };
+            layer_z[layer] = z_sign * gm.mesh.nodes[f.node][2];
+            nodes[(t * rows.len() + row) * layers + layer] = (f.node, f.normal);
         }
         if nodes.iter().any(|n| n.0 == usize::MAX) {
             return Err("the flank grid has holes: not a structured gear mesh".into());

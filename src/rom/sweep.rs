@@ -48,8 +48,7 @@ impl ReducedPair {
             let z = gear.teeth as i64;
             let mut teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
             teeth.dedup();
-            let side = if i == 0 { 1 } else { -1 };
-            let grid = FlankGrid::new(&model.mesh, side, &teeth)?;
+            let grid = FlankGrid::contact_flank(&model.mesh, i, &teeth)?;
             match method {
                 Method::PmorHertz { depth_m, p_en, .. } => {
                     let (reduced, _, report) = pmor_hertz(&model, &factor, grid, depth_m, p_en, |n| progress(i, n))?;
