@@ -30,7 +30,13 @@ fn main() {
     if std::env::var("GEARFMU_BENCH_FINE").map_or(true, |v| v != "0") {
         levels.push((
             "paper-like",
-            MeshSpec { elements_across_tooth: 8, elements_along_profile: 16, elements_in_rim: 8, axial_slices: 8 },
+            MeshSpec {
+                elements_across_tooth: 8,
+                elements_along_profile: 16,
+                elements_in_rim: 8,
+                axial_slices: 8,
+                ..Default::default()
+            },
         ));
     }
     println!("| mesh | gear | free DOF | mesh s | assembly K+M s | factorization AMD s / ND s | nnz(L) AMD / ND | s per block of 64 solves (2 blocks in parallel) | 40 modes s (iterations) | Sturm / Ritz below σ | peak MiB |");

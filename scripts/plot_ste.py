@@ -77,7 +77,7 @@ def main():
     methods = list(dict.fromkeys(m for m, _ in curves))
     colours = plt.get_cmap("viridis")
 
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = plt.subplots(figsize=(10.5, 5))
     shade_contact_zones(ax, curves[(methods[0], torques[0])])
     for (method, torque), points in sorted(curves.items()):
         c = colours(torques.index(torque) / max(1, len(torques) - 1) * 0.9)
@@ -89,7 +89,7 @@ def main():
     ax.set_ylabel("STE (µm, along the line of action)")
     ax.set_title(f"{args.title}\n(background: pairs in contact, {methods[0]} at {torques[0]:g} N·m)")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, ncol=2, loc="center right")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     fig.savefig(args.png, dpi=120)
 

@@ -2,7 +2,7 @@
 //! rigid-body modes of the unclamped gear, and the involute's normals.
 
 use gearfmu::fe::assembly::{self, DofMap, Material};
-use gearfmu::fe::gear_mesh::{mesh_gear, section_area, MeshSpec};
+use gearfmu::fe::gear_mesh::{mesh_gear, section_area, MeshSpec, ProfileGrading};
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::gear::{GearPair, PairSpec};
 use std::path::Path;
@@ -17,18 +17,24 @@ fn material(p: &GearPair) -> Material {
 }
 
 /// Mass of the meshed gear = ρ·(profile area × face width − bore), the area by quadrature of the
-/// exact profile (fillet + involute), within 0.5 %.
+/// exact profile (fillet + involute), within 0.5 %, for both spacings of the profile rows.
 #[test]
 fn meshed_mass_equals_density_times_exact_volume() {
-    for name in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
+    let uniform = MeshSpec { profile_grading: ProfileGrading::Uniform, ..Default::default() };
+    for (name, spec) in [
+        ("kurokawa_spur.toml", MeshSpec::default()),
+        ("kurokawa_helical.toml", MeshSpec::default()),
+        ("kurokawa_spur.toml", uniform),
+    ] {
         let p = pair(name);
         for gear in [&p.gear1, &p.gear2] {
-            let gm = mesh_gear(&p, gear, &MeshSpec::default());
+            let gm = mesh_gear(&p, gear, &spec);
             let meshed = gm.mesh.volume() * p.density_kg_m3;
             let exact = section_area(&p, gear) * p.face_width_m * p.density_kg_m3;
             let error = (meshed - exact) / exact;
             println!(
-                "{name} z = {}: meshed mass {meshed:.5} kg, exact {exact:.5} kg, error {:+.3} %",
+                "{name} {:?} z = {}: meshed mass {meshed:.5} kg, exact {exact:.5} kg, error {:+.3} %",
+                spec.profile_grading,
                 gear.teeth,
                 100.0 * error
             );

@@ -14,7 +14,13 @@ use gearfmu::gear::{GearPair, PairSpec};
 fn nested_dissection_factor_solves_like_amd_and_symbolic_reuse_works() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
     let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let spec = MeshSpec { elements_across_tooth: 6, elements_along_profile: 12, elements_in_rim: 6, axial_slices: 6 };
+    let spec = MeshSpec {
+        elements_across_tooth: 6,
+        elements_along_profile: 12,
+        elements_in_rim: 6,
+        axial_slices: 6,
+        ..Default::default()
+    };
     let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
     let k = &model.stiffness;
     let f = model.dofs.load_vector(&pitch_line_load(&model.mesh, &p.gear1, spec.axial_slices, 1000.0).unwrap());

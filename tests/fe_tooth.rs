@@ -13,7 +13,13 @@ use gearfmu::gear::{GearPair, PairSpec};
 fn pitch_point_tooth_compliance_agrees_with_the_potential_energy_method() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
     let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let spec = MeshSpec { elements_across_tooth: 6, elements_along_profile: 12, elements_in_rim: 6, axial_slices: 4 };
+    let spec = MeshSpec {
+        elements_across_tooth: 6,
+        elements_along_profile: 12,
+        elements_in_rim: 6,
+        axial_slices: 4,
+        ..Default::default()
+    };
     let mut pair_fe = 0.0;
     for gear in [&p.gear1, &p.gear2] {
         let fe = single_tooth_compliance(&p, gear, &spec, Formulation::IncompatibleModes).unwrap();

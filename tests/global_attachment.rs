@@ -24,6 +24,7 @@ fn compliances(across: usize, profile: usize, rim: usize, depths: &[f64]) -> (f6
         elements_along_profile: profile,
         elements_in_rim: rim,
         axial_slices: 4,
+        ..Default::default()
     };
     let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
     let (gm, dofs, material) = (&model.mesh, &model.dofs, &model.material);

@@ -19,7 +19,13 @@ use gearfmu::rom::svd::compress;
 fn compressed_global_attachment_space_carries_the_line_load() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
     let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let spec = MeshSpec { elements_across_tooth: 6, elements_along_profile: 12, elements_in_rim: 6, axial_slices: 4 };
+    let spec = MeshSpec {
+        elements_across_tooth: 6,
+        elements_along_profile: 12,
+        elements_in_rim: 6,
+        axial_slices: 4,
+        ..Default::default()
+    };
     let depth = 3e-3;
     let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
     let (gm, dofs, material, k) = (&model.mesh, &model.dofs, &model.material, &model.stiffness);

@@ -14,7 +14,7 @@ use gearfmu::contact::hertz::ApproachLaw;
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
 use gearfmu::fe::clamped_gear::ClampedGear;
-use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh, MeshSpec};
+use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh, MeshSpec, ProfileGrading};
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::{eigen, vtk};
 use gearfmu::gear::{GearPair, PairSpec};
@@ -140,6 +140,17 @@ struct Resolution {
     rim: Option<usize>,
     #[arg(long)]
     slices: Option<usize>,
+    /// Spacing of the rows along the profile (the spec's mesh.profile_grading).
+    #[arg(long, value_enum)]
+    profile_grading: Option<Grading>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Grading {
+    /// sin²: fine at root and tip, coarsest at mid-flank (the default).
+    RootAndTip,
+    /// Even rows: what the penalty baseline's node-to-surface contact needs.
+    Uniform,
 }
 
 /// Reduces the pair, runs the sweep (progress on stderr), prints a summary per torque and writes
@@ -177,11 +188,24 @@ fn ste_command(
         Method::PmorHertz { .. } => "pmor-hertz",
         Method::Penalty { .. } => "penalty",
     };
+    let b_mm = pair.face_width_m * 1e3;
     for &t in torques {
         let ste: Vec<f64> = cases.iter().filter(|c| c.torque_nm == t).map(|c| c.ste_m * 1e6).collect();
         let mean = ste.iter().sum::<f64>() / ste.len() as f64;
         let (lo, hi) = ste.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-        println!("{name} T₁ {t} N·m: mean STE {mean:.3} µm, peak-to-peak {:.3} µm", hi - lo);
+        // Mean mesh stiffness as ISO 6336-1 counts it: the transverse force along the line of
+        // action per face width over the mean transverse deflection along it. The specific load
+        // (Tables 4 and 7, and ISO's light-load factor) is the tangential force at the reference
+        // circle per face width.
+        let stiffness = t / pair.gear1.base_radius_m / b_mm / mean;
+        let specific_load = t / pair.gear1.pitch_radius_m / b_mm;
+        let iso = iso6336::mesh_stiffness_c_gamma_alpha_at(&pair, specific_load);
+        println!(
+            "{name} T₁ {t} N·m (w = {specific_load:.1} N/mm): mean STE {mean:.3} µm, peak-to-peak {:.3} µm; \
+             mean mesh stiffness {stiffness:.2} N/(mm·µm), ISO 6336-1 c_γα {iso:.2} (ratio {:.3})",
+            hi - lo,
+            stiffness / iso
+        );
     }
     println!(
         "reduction {offline:.2} s; {} cases in {sweep:.2} s ({:.3} s per case on {} threads)",
@@ -384,6 +408,12 @@ fn pair_and_mesh(spec_path: &Path, r: Resolution) -> Result<(GearPair, MeshSpec)
     m.elements_along_profile = r.profile.unwrap_or(m.elements_along_profile);
     m.elements_in_rim = r.rim.unwrap_or(m.elements_in_rim);
     m.axial_slices = r.slices.unwrap_or(m.axial_slices);
+    if let Some(g) = r.profile_grading {
+        m.profile_grading = match g {
+            Grading::RootAndTip => ProfileGrading::RootAndTip,
+            Grading::Uniform => ProfileGrading::Uniform,
+        };
+    }
     let mesh = spec.mesh;
     Ok((GearPair::from_spec(&spec)?, mesh))
 }

@@ -28,12 +28,32 @@ pub struct MeshSpec {
     pub elements_in_rim: usize,
     /// Elements across the face width.
     pub axial_slices: usize,
+    /// Spacing of the rows along the profile.
+    pub profile_grading: ProfileGrading,
+}
+
+/// How the element rows along the profile are spaced between the root circle and the tip.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProfileGrading {
+    /// sin² spacing: fine at the root (fillet stresses) and at the tip, coarsest at mid-flank.
+    #[default]
+    RootAndTip,
+    /// Even spacing: the active flank resolved alike everywhere, which node-to-surface contact
+    /// needs (it sees the flank only at node rows).
+    Uniform,
 }
 
 impl Default for MeshSpec {
     /// The coarse default (tests, quick studies).
     fn default() -> Self {
-        MeshSpec { elements_across_tooth: 4, elements_along_profile: 8, elements_in_rim: 4, axial_slices: 4 }
+        MeshSpec {
+            elements_across_tooth: 4,
+            elements_along_profile: 8,
+            elements_in_rim: 4,
+            axial_slices: 4,
+            profile_grading: ProfileGrading::RootAndTip,
+        }
     }
 }
 
@@ -113,7 +133,11 @@ fn sector(gear: &Gear, alpha_t: f64, spec: &MeshSpec) -> Sector {
     let n_prof = spec.elements_along_profile;
     let mut tooth = Vec::new();
     for k in 1..=n_prof {
-        let s = (0.5 * PI * k as f64 / n_prof as f64).sin().powi(2);
+        let t = k as f64 / n_prof as f64;
+        let s = match spec.profile_grading {
+            ProfileGrading::RootAndTip => (0.5 * PI * t).sin().powi(2),
+            ProfileGrading::Uniform => t,
+        };
         let r = r_f + (gear.tip_radius_m - r_f) * s;
         let half = psi(r);
         for j in 0..=n_lat {
