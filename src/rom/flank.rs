@@ -40,7 +40,7 @@ impl FlankGrid {
     }
 
     /// The flank nodes of `side` (+1 / −1) on `teeth`; `turned_over`: world z = −own z.
-    pub fn new(gm: &GearMesh, side: i8, teeth: &[usize], turned_over: bool) -> Result<Self, String> {
+    fn new(gm: &GearMesh, side: i8, teeth: &[usize], turned_over: bool) -> Result<Self, String> {
         let radius = |n: usize| gm.mesh.nodes[n][0].hypot(gm.mesh.nodes[n][1]);
         let on_side: Vec<_> = gm.flank_nodes.iter().filter(|f| f.side == side && f.tooth == teeth[0]).collect();
         let mut rows: Vec<f64> = on_side.iter().map(|f| radius(f.node)).collect();

@@ -11,7 +11,7 @@
 use super::attachment::global_attachment_modes;
 use super::flank::{FlankGrid, Shares};
 use super::svd::compress;
-use crate::fe::assembly::{mul, Cholesky, DofMap};
+use crate::fe::assembly::{Cholesky, DofMap};
 use crate::fe::clamped_gear::ClampedGear;
 use faer::Mat;
 
@@ -125,25 +125,11 @@ pub fn pmor_hertz(
             basis[(i, j)] *= s;
         }
     }
-    let stiffness = reduced_stiffness(&model.stiffness, &basis);
+    let stiffness = super::svd::projected_stiffness(&model.stiffness, &basis);
     let report =
         CompressionReport { n_c: flank.len(), n_sv: c.n_sv, retained: c.retained, singular_values: c.singular_values };
     let flank_modes = flank_rows(&basis, &model.dofs, &flank);
     Ok((ReducedGear { flank, flank_modes, stiffness }, Reconstructor { basis, dofs: model.dofs.clone() }, report))
-}
-
-/// Bᵀ K B.
-fn reduced_stiffness(k: &faer::sparse::SparseColMat<usize, f64>, basis: &Mat<f64>) -> Mat<f64> {
-    let (n, m) = (basis.nrows(), basis.ncols());
-    let mut kb = Mat::zeros(n, m);
-    for j in 0..m {
-        let col: Vec<f64> = (0..n).map(|i| basis[(i, j)]).collect();
-        for (i, v) in mul(k, &col).into_iter().enumerate() {
-            kb[(i, j)] = v;
-        }
-    }
-    let kr = basis.transpose() * &kb;
-    Mat::from_fn(m, m, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]))
 }
 
 /// Standard CMS: ψ = K⁻¹F, one column per loadable node (a unit load along its inward normal).

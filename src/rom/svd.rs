@@ -19,18 +19,26 @@ pub struct Compression {
     pub retained: f64,
 }
 
-/// Compresses ψ (free DOFs × n_c) against stiffness K keeping the share `p_en` (e.g. 0.99).
-pub fn compress(k: &SparseColMat<usize, f64>, psi: &Mat<f64>, p_en: f64) -> Compression {
-    let (n, n_c) = (psi.nrows(), psi.ncols());
-    let mut k_psi = Mat::zeros(n, n_c);
-    for j in 0..n_c {
-        let col: Vec<f64> = (0..n).map(|i| psi[(i, j)]).collect();
+/// The Galerkin projection BᵀKB of a sparse stiffness onto a basis, symmetrized (the two halves
+/// differ by round-off only).
+pub fn projected_stiffness(k: &SparseColMat<usize, f64>, basis: &Mat<f64>) -> Mat<f64> {
+    let (n, m) = (basis.nrows(), basis.ncols());
+    let mut kb = Mat::zeros(n, m);
+    for j in 0..m {
+        let col: Vec<f64> = (0..n).map(|i| basis[(i, j)]).collect();
         for (i, v) in mul(k, &col).into_iter().enumerate() {
-            k_psi[(i, j)] = v;
+            kb[(i, j)] = v;
         }
     }
-    let k_r = psi.transpose() * &k_psi;
-    let k_r = DMatrix::from_fn(n_c, n_c, |i, j| 0.5 * (k_r[(i, j)] + k_r[(j, i)]));
+    let kr = basis.transpose() * &kb;
+    Mat::from_fn(m, m, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]))
+}
+
+/// Compresses ψ (free DOFs × n_c) against stiffness K keeping the share `p_en` (e.g. 0.99).
+pub fn compress(k: &SparseColMat<usize, f64>, psi: &Mat<f64>, p_en: f64) -> Compression {
+    let n_c = psi.ncols();
+    let k_r = projected_stiffness(k, psi);
+    let k_r = DMatrix::from_fn(n_c, n_c, |i, j| k_r[(i, j)]);
     let svd = k_r.svd(true, false);
     let mut order: Vec<usize> = (0..n_c).collect();
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
