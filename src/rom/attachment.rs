@@ -29,81 +29,122 @@ pub fn partial_response(
     load: &NodalLoad,
     depth_m: f64,
 ) -> Result<Vec<f64>, String> {
-    // The load direction and a reference point on the loaded surface.
-    let total: [f64; 3] = load.iter().fold([0.0; 3], |a, (_, f)| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
-    let norm = (total[0] * total[0] + total[1] * total[1] + total[2] * total[2]).sqrt();
-    if norm == 0.0 {
-        return Err("the load has no resultant: no direction to measure depth along".into());
+    let partial = PartialResponse::solve(mesh, material, formulation, load, depth_m)?;
+    let mut u = vec![0.0; mesh.dofs()];
+    for (i, &n) in partial.nodes.iter().enumerate() {
+        u[3 * n..3 * n + 3].copy_from_slice(&partial.displacement[3 * i..3 * i + 3]);
     }
-    let dir = total.map(|v| v / norm);
-    let depth = |n: usize| {
-        // Depth below the loaded surface, along the load, measured from the nearest loaded node.
-        load.iter()
-            .map(|&(m, _)| {
-                let (p, q) = (mesh.nodes[n], mesh.nodes[m]);
-                (p[0] - q[0]) * dir[0] + (p[1] - q[1]) * dir[1] + (p[2] - q[2]) * dir[2]
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
-    let node_depth: Vec<f64> = (0..mesh.nodes.len()).map(depth).collect();
-    let tolerance = 1e-9;
-    let inside: Vec<usize> = (0..mesh.elements.len())
-        .filter(|&e| mesh.elements[e].iter().all(|&n| node_depth[n] <= depth_m + tolerance))
-        .collect();
-    if inside.is_empty() {
-        return Err(format!("no element lies within depth {depth_m} m of the load: h is smaller than the mesh"));
+    Ok(u)
+}
+
+/// The partial model's response on its own nodes only: a few hundred nodes of a gear of tens of
+/// thousands, so that one response per loadable node fits in memory at the paper's resolution.
+pub struct PartialResponse {
+    /// Gear node numbers of the partial model.
+    pub nodes: Vec<usize>,
+    /// Displacement of those nodes (node-major, 3 per node; zero on the clamped section).
+    pub displacement: Vec<f64>,
+}
+
+impl PartialResponse {
+    /// The partial model at depth h with the standard lateral reach, `LATERAL_REACH`·h.
+    pub fn solve(
+        mesh: &Mesh,
+        material: &Material,
+        formulation: Formulation,
+        load: &NodalLoad,
+        depth_m: f64,
+    ) -> Result<PartialResponse, String> {
+        Self::solve_with_reach(mesh, material, formulation, load, depth_m, LATERAL_REACH * depth_m)
     }
-    // Sub-mesh of the partial model; nodes shared with outside elements are the clamped section.
-    let mut in_partial = vec![false; mesh.nodes.len()];
-    for &e in &inside {
-        for &n in &mesh.elements[e] {
-            in_partial[n] = true;
+
+    /// The partial model at depth h that reaches `reach_m` from the load (`f64::INFINITY`: the
+    /// whole half-space within depth h, the slow reference the reach is checked against).
+    pub fn solve_with_reach(
+        mesh: &Mesh,
+        material: &Material,
+        formulation: Formulation,
+        load: &NodalLoad,
+        depth_m: f64,
+        reach_m: f64,
+    ) -> Result<PartialResponse, String> {
+        // The load direction and a reference point on the loaded surface.
+        let total: [f64; 3] = load.iter().fold([0.0; 3], |a, (_, f)| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
+        let norm = (total[0] * total[0] + total[1] * total[1] + total[2] * total[2]).sqrt();
+        if norm == 0.0 {
+            return Err("the load has no resultant: no direction to measure depth along".into());
         }
-    }
-    let mut on_section = vec![false; mesh.nodes.len()];
-    let mut is_inside = vec![false; mesh.elements.len()];
-    for &e in &inside {
-        is_inside[e] = true;
-    }
-    for (e, el) in mesh.elements.iter().enumerate() {
-        if !is_inside[e] {
-            for &n in el {
-                if in_partial[n] {
-                    on_section[n] = true;
+        let dir = total.map(|v| v / norm);
+        // A node belongs to the slab if it lies no deeper than h below the loaded surface (depth
+        // along the load, from the nearest loaded node) and within the lateral reach of a loaded
+        // node: the local deformation has decayed beyond it, and the rest of the gear — other
+        // teeth in front of the tangent plane included — only costs time.
+        let within = |n: usize| {
+            let p = mesh.nodes[n];
+            let (mut depth, mut distance_sq) = (f64::INFINITY, f64::INFINITY);
+            for &(m, _) in load {
+                let q = mesh.nodes[m];
+                let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+                depth = depth.min(d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2]);
+                distance_sq = distance_sq.min(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            }
+            let tolerance = 1e-9;
+            depth <= depth_m + tolerance && distance_sq.sqrt() <= reach_m + tolerance
+        };
+        let node_within: Vec<bool> = (0..mesh.nodes.len()).map(within).collect();
+        let inside: Vec<usize> =
+            (0..mesh.elements.len()).filter(|&e| mesh.elements[e].iter().all(|&n| node_within[n])).collect();
+        if inside.is_empty() {
+            return Err(format!("no element lies within depth {depth_m} m of the load: h is smaller than the mesh"));
+        }
+        // Sub-mesh of the partial model; nodes shared with outside elements are the clamped section.
+        let mut in_partial = vec![false; mesh.nodes.len()];
+        for &e in &inside {
+            for &n in &mesh.elements[e] {
+                in_partial[n] = true;
+            }
+        }
+        let mut on_section = vec![false; mesh.nodes.len()];
+        let mut is_inside = vec![false; mesh.elements.len()];
+        for &e in &inside {
+            is_inside[e] = true;
+        }
+        for (e, el) in mesh.elements.iter().enumerate() {
+            if !is_inside[e] {
+                for &n in el {
+                    if in_partial[n] {
+                        on_section[n] = true;
+                    }
                 }
             }
         }
-    }
-    let local: Vec<usize> = (0..mesh.nodes.len()).filter(|&n| in_partial[n]).collect();
-    let mut index = vec![usize::MAX; mesh.nodes.len()];
-    for (i, &n) in local.iter().enumerate() {
-        index[n] = i;
-    }
-    let sub = Mesh {
-        nodes: local.iter().map(|&n| mesh.nodes[n]).collect(),
-        elements: inside.iter().map(|&e| mesh.elements[e].map(|n| index[n])).collect(),
-    };
-    let clamped: Vec<bool> = local.iter().map(|&n| on_section[n]).collect();
-    if !clamped.iter().any(|&c| c) {
-        return Err("the partial model has no clamped section (h reaches through the whole body)".into());
-    }
-    for &(n, _) in load {
-        if on_section[n] || !in_partial[n] {
-            return Err(format!(
-                "loaded node {n} lies on the clamped section of its partial model: the depth h = {:.2} mm does not reach past the flank elements; raise h or refine the mesh",
-                depth_m * 1e3
-            ));
+        let local: Vec<usize> = (0..mesh.nodes.len()).filter(|&n| in_partial[n]).collect();
+        let mut index = vec![usize::MAX; mesh.nodes.len()];
+        for (i, &n) in local.iter().enumerate() {
+            index[n] = i;
         }
+        let sub = Mesh {
+            nodes: local.iter().map(|&n| mesh.nodes[n]).collect(),
+            elements: inside.iter().map(|&e| mesh.elements[e].map(|n| index[n])).collect(),
+        };
+        let clamped: Vec<bool> = local.iter().map(|&n| on_section[n]).collect();
+        if !clamped.iter().any(|&c| c) {
+            return Err("the partial model has no clamped section (h reaches through the whole body)".into());
+        }
+        for &(n, _) in load {
+            if on_section[n] || !in_partial[n] {
+                return Err(format!(
+                    "loaded node {n} lies on the clamped section of its partial model: the depth h = {:.2} mm does not reach past the flank elements; raise h or refine the mesh",
+                    depth_m * 1e3
+                ));
+            }
+        }
+        let dofs = DofMap::new(sub.nodes.len(), &clamped);
+        let k = assembly::stiffness(&sub, material, formulation, &dofs);
+        let local_load: Vec<(usize, [f64; 3])> = load.iter().map(|&(n, force)| (index[n], force)).collect();
+        let displacement = dofs.expand(&Cholesky::new(&k)?.solve(&dofs.load_vector(&local_load)));
+        Ok(PartialResponse { nodes: local, displacement })
     }
-    let dofs = DofMap::new(sub.nodes.len(), &clamped);
-    let k = assembly::stiffness(&sub, material, formulation, &dofs);
-    let local_load: Vec<(usize, [f64; 3])> = load.iter().map(|&(n, force)| (index[n], force)).collect();
-    let u_sub = dofs.expand(&Cholesky::new(&k)?.solve(&dofs.load_vector(&local_load)));
-    let mut u = vec![0.0; mesh.dofs()];
-    for (i, &n) in local.iter().enumerate() {
-        u[3 * n..3 * n + 3].copy_from_slice(&u_sub[3 * i..3 * i + 3]);
-    }
-    Ok(u)
 }
 
 /// Total and global responses (all DOFs) of the gear clamped by `dofs` (its factorized stiffness
@@ -149,19 +190,21 @@ pub fn global_attachment_modes(
     }
     total_stiffness.solve_block(&mut psi);
     let done = AtomicUsize::new(0);
-    let partials: Vec<Result<Vec<f64>, String>> = nodes
+    let partials: Vec<Result<PartialResponse, String>> = nodes
         .par_iter()
         .map(|&(node, normal)| {
-            let r = partial_response(mesh, material, formulation, &[(node, normal.map(|v| -v))], depth_m);
+            let r = PartialResponse::solve(mesh, material, formulation, &[(node, normal.map(|v| -v))], depth_m);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             r
         })
         .collect();
     for (j, partial) in partials.into_iter().enumerate() {
         let partial = partial?;
-        for (dof, free) in dofs.free.iter().enumerate() {
-            if let Some(i) = free {
-                psi[(*i, j)] -= partial[dof];
+        for (k, &n) in partial.nodes.iter().enumerate() {
+            for c in 0..3 {
+                if let Some(i) = dofs.free[3 * n + c] {
+                    psi[(i, j)] -= partial.displacement[3 * k + c];
+                }
             }
         }
     }
