@@ -173,6 +173,7 @@ fn bad_arguments_are_refused_with_a_log_line() {
     assert_logged("bad-args", "communicationStepSize must be finite and > 0, got 0");
     fresh(c);
     assert_eq!(fmi2DoStep(c, 0.0, -1e-4, 1), ERR);
+    assert_logged("bad-args", "communicationStepSize must be finite and > 0, got -0.0001");
     fresh(c);
     assert_eq!(fmi2DoStep(c, 0.0, 2e-3, 1), ERR);
     assert_logged("bad-args", "goes past stopTime 0.001");
@@ -236,6 +237,72 @@ fn nan_input_is_refused_and_the_run_continues_from_a_saved_state() {
     assert!(state.is_null());
     fmi2FreeInstance(c);
     fmi2FreeInstance(reference);
+}
+
+/// An infinite input on a healthy instance (not only after a NaN) is refused with its log line and
+/// changes nothing: after fmi2Reset the run reproduces an untouched instance bit for bit.
+#[test]
+fn infinite_input_on_a_healthy_instance_is_refused_and_logged() {
+    let reference = initialized("inf-reference", None);
+    let expected = run(reference, 0.0, 10, 1e-4);
+    for (name, input, value, text) in [
+        ("inf-plus", "tau_1", f64::INFINITY, "value inf is not finite; input refused"),
+        ("inf-minus", "tau_2", f64::NEG_INFINITY, "value -inf is not finite; input refused"),
+    ] {
+        let c = initialized(name, None);
+        assert_eq!(run(c, 0.0, 5, 1e-4)[..], expected[..5]);
+        assert_eq!(set(c, input, value), ERR);
+        assert_logged(name, &format!("value reference {}: {text}", vr(input)));
+        assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), ERR, "in the Error phase nothing steps");
+        assert_eq!(fmi2Reset(c), OK);
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+        assert_eq!(fmi2EnterInitializationMode(c), OK);
+        assert_eq!(fmi2ExitInitializationMode(c), OK);
+        assert_eq!(run(c, 0.0, 10, 1e-4)[..], expected[..], "{name}: the run after fmi2Reset");
+        fmi2FreeInstance(c);
+    }
+    fmi2FreeInstance(reference);
+}
+
+/// fmi2SetDebugLogging (FMI 2.0 §2.1.5): only the categories switched on reach the logger, and
+/// with logging off nothing does — except errors, which are always reported with their reason.
+#[test]
+fn log_categories_select_what_reaches_the_logger() {
+    let events = CString::new("logEvents").unwrap();
+    let errors = CString::new("logStatusError").unwrap();
+    let initialize = |c| {
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+        assert_eq!(fmi2EnterInitializationMode(c), OK);
+        assert_eq!(fmi2ExitInitializationMode(c), OK);
+    };
+    let event_logged = |name: &str| logs(name).iter().any(|l| l.contains("initialized at t = 0"));
+    // All categories (loggingOn at instantiate): the initialization event arrives.
+    let c = instantiate("log-all");
+    initialize(c);
+    assert!(event_logged("log-all"), "{:?}", logs("log-all"));
+    fmi2FreeInstance(c);
+    // logEvents alone: still there.
+    let c = instantiate("log-events");
+    assert_eq!(fmi2SetDebugLogging(c, 1, 1, &events.as_ptr()), OK);
+    initialize(c);
+    assert!(event_logged("log-events"), "{:?}", logs("log-events"));
+    fmi2FreeInstance(c);
+    // logStatusError alone: the event is suppressed, an error is not.
+    let c = instantiate("log-errors");
+    assert_eq!(fmi2SetDebugLogging(c, 1, 1, &errors.as_ptr()), OK);
+    initialize(c);
+    assert!(!event_logged("log-errors"), "{:?}", logs("log-errors"));
+    assert_eq!(set(c, "tau_1", f64::NAN), ERR);
+    assert_logged("log-errors", "value NaN is not finite");
+    fmi2FreeInstance(c);
+    // Logging off for every category: silent, but the error and its reason still arrive.
+    let c = instantiate("log-off");
+    assert_eq!(fmi2SetDebugLogging(c, 0, 0, std::ptr::null()), OK);
+    initialize(c);
+    assert!(logs("log-off").is_empty(), "{:?}", logs("log-off"));
+    assert_eq!(set(c, "tau_1", f64::NAN), ERR);
+    assert_logged("log-off", "value NaN is not finite");
+    fmi2FreeInstance(c);
 }
 
 #[test]
