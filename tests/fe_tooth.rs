@@ -37,9 +37,11 @@ fn pitch_point_tooth_compliance_agrees_with_the_potential_energy_method() {
         pair_fe += fe.compliance_per_width;
     }
     let c_fe = 1.0 / (pair_fe * 1e9);
-    let (c_th, c_prime) = (iso6336::theoretical_single_stiffness(&p), iso6336::single_stiffness(&p));
+    // The q′ series is for steel (E_st = 206 GPa): compare at the pair's own modulus.
+    let c_th = iso6336::theoretical_single_stiffness(&p) * iso6336::material_factor(&p);
+    let c_prime = iso6336::single_stiffness(&p);
     println!(
-        "pair at the pitch point: FE {c_fe:.2} N/(mm·µm); ISO c′_th {c_th:.2} (ratio {:.3}); ISO c′ = c′_th·C_M·C_B {c_prime:.2} (ratio {:.3})",
+        "pair at the pitch point: FE {c_fe:.2} N/(mm·µm); ISO c′_th·E/E_st {c_th:.2} (ratio {:.3}); ISO c′ = c′_th·C_M·C_B·E/E_st {c_prime:.2} (ratio {:.3})",
         c_fe / c_th,
         c_fe / c_prime
     );

@@ -198,13 +198,19 @@ fn ste_command(
         // (Tables 4 and 7, and ISO's light-load factor) is the tangential force at the reference
         // circle per face width.
         let stiffness = t / pair.gear1.base_radius_m / b_mm / mean;
+        // ISO defines c_γα as the mean of the mesh stiffness over the cycle: the arithmetic mean of
+        // the position-wise secant stiffness, a little above force / mean STE (a harmonic mean).
+        let stiffness_mean_of_positions =
+            ste.iter().map(|s| t / pair.gear1.base_radius_m / b_mm / s).sum::<f64>() / ste.len() as f64;
         let specific_load = t / pair.gear1.pitch_radius_m / b_mm;
         let iso = iso6336::mesh_stiffness_c_gamma_alpha_at(&pair, specific_load);
         println!(
             "{name} T₁ {t} N·m (w = {specific_load:.1} N/mm): mean STE {mean:.3} µm, peak-to-peak {:.3} µm; \
-             mean mesh stiffness {stiffness:.2} N/(mm·µm), ISO 6336-1 c_γα {iso:.2} (ratio {:.3})",
+             mean mesh stiffness {stiffness:.2} N/(mm·µm), ISO 6336-1 c_γα {iso:.2} (ratio {:.3}); \
+             mean of the position-wise stiffness {stiffness_mean_of_positions:.2} (ratio {:.3})",
             hi - lo,
-            stiffness / iso
+            stiffness / iso,
+            stiffness_mean_of_positions / iso
         );
     }
     println!(
@@ -551,10 +557,11 @@ fn tooth_stiffness_command(spec: &Path, resolution: Resolution) -> Result<()> {
         pair_compliance += fe.compliance_per_width * 1e9;
     }
     let c = 1.0 / pair_compliance;
+    // The q′ series is for steel (E_st = 206 GPa): compare at the pair's own modulus.
+    let c_th = iso6336::theoretical_single_stiffness(&pair) * iso6336::material_factor(&pair);
     println!(
-        "pair: FE {c:.2} N/(mm·µm); ISO 6336-1 c′_th {:.2} (FE/ISO {:.3}), c′ = c′_th·C_M·C_B {:.2} (FE/ISO {:.3})",
-        iso6336::theoretical_single_stiffness(&pair),
-        c / iso6336::theoretical_single_stiffness(&pair),
+        "pair: FE {c:.2} N/(mm·µm); ISO 6336-1 c′_th·E/E_st {c_th:.2} (FE/ISO {:.3}), c′ = c′_th·C_M·C_B·E/E_st {:.2} (FE/ISO {:.3})",
+        c / c_th,
         iso6336::single_stiffness(&pair),
         c / iso6336::single_stiffness(&pair)
     );

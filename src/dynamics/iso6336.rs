@@ -4,11 +4,12 @@
 use crate::gear::GearPair;
 
 /// Theoretical single stiffness c′_th = 1/q′ in N/(mm·µm), from the q′ series (ISO 6336-1, Eq. 42,
-/// Table 9) with virtual tooth numbers z_n = z / cos³β.
+/// Table 9) with ISO's virtual tooth numbers z_n = z / (cos²β_b·cos β) (not the cruder z / cos³β,
+/// which is 0.9 % larger at β = 15.8°).
 pub fn theoretical_single_stiffness(pair: &GearPair) -> f64 {
-    let cos3 = pair.helix_angle_rad.cos().powi(3);
-    let zn1 = pair.gear1.teeth as f64 / cos3;
-    let zn2 = pair.gear2.teeth as f64 / cos3;
+    let virtual_factor = pair.base_helix_angle_rad.cos().powi(2) * pair.helix_angle_rad.cos();
+    let zn1 = pair.gear1.teeth as f64 / virtual_factor;
+    let zn2 = pair.gear2.teeth as f64 / virtual_factor;
     let (x1, x2) = (pair.gear1.profile_shift, pair.gear2.profile_shift);
     let q =
         0.04723 + 0.15551 / zn1 + 0.25791 / zn2 - 0.00635 * x1 - 0.11654 * x1 / zn1 - 0.00193 * x2 - 0.24188 * x2 / zn2
@@ -17,15 +18,26 @@ pub fn theoretical_single_stiffness(pair: &GearPair) -> f64 {
     1.0 / q
 }
 
-/// Single stiffness c′ = c′_th·C_M·C_R·C_B·cos β in N/(mm·µm): solid gear blanks (C_R = 1),
-/// C_M = 0.8, and the basic-rack factor C_B from the dedendum of the rack (h_fP/m_n).
+/// Young's modulus the q′ series was fitted for: steel/steel pairs, E_st = 206 000 N/mm².
+pub const STEEL_REFERENCE_MODULUS_PA: f64 = 206.0e9;
+
+/// Material factor E/E_st by which ISO 6336-1 scales c′ and c_γ for pairs other than the steel
+/// the q′ series was fitted on (E = 2E₁E₂/(E₁+E₂); both gears share one material here). The
+/// Kurokawa pairs have E = 200 GPa (paper Table 3): 0.971.
+pub fn material_factor(pair: &GearPair) -> f64 {
+    pair.youngs_modulus_pa / STEEL_REFERENCE_MODULUS_PA
+}
+
+/// Single stiffness c′ = c′_th·C_M·C_R·C_B·cos β·E/E_st in N/(mm·µm): solid gear blanks
+/// (C_R = 1), C_M = 0.8, the basic-rack factor C_B from the dedendum of the rack (h_fP/m_n), and
+/// the material factor.
 pub fn single_stiffness(pair: &GearPair) -> f64 {
     let dedendum_coefficient = pair.rack_dedendum_coefficient;
     let c_m = 0.8;
     let c_r = 1.0;
     let c_b = (1.0 + 0.5 * (1.2 - dedendum_coefficient))
         * (1.0 - 0.02 * (20.0 - pair.normal_pressure_angle_rad.to_degrees()));
-    theoretical_single_stiffness(pair) * c_m * c_r * c_b * pair.helix_angle_rad.cos()
+    theoretical_single_stiffness(pair) * c_m * c_r * c_b * pair.helix_angle_rad.cos() * material_factor(pair)
 }
 
 /// Mean mesh stiffness c_γα = c′·(0.75 ε_α + 0.25) in N/(mm·µm) (ISO 6336-1 Eq. 43), valid for
