@@ -15,7 +15,7 @@ pub struct ToothCompliance {
     pub dofs: usize,
     /// Deflection along the load per unit load times face width (m²/N); ×1e9 → mm·µm/N.
     pub compliance_per_width: f64,
-    /// Radius the load acts at (the pitch circle).
+    /// Radius the load acts at.
     pub load_radius_m: f64,
 }
 
@@ -28,15 +28,25 @@ pub fn pitch_line_load(
     axial_slices: usize,
     total_force: f64,
 ) -> Result<Vec<(usize, [f64; 3])>, String> {
+    line_load_at_radius(gm, axial_slices, gear.pitch_radius_m, total_force)
+}
+
+/// The same line load at any radius between the flank's lowest and highest node rows.
+pub fn line_load_at_radius(
+    gm: &GearMesh,
+    axial_slices: usize,
+    load_radius_m: f64,
+    total_force: f64,
+) -> Result<Vec<(usize, [f64; 3])>, String> {
     let radius = |node: usize| gm.mesh.nodes[node][0].hypot(gm.mesh.nodes[node][1]);
     let flank: Vec<_> = gm.flank_nodes.iter().filter(|f| f.tooth == 0 && f.side == 1).collect();
-    let r_p = gear.pitch_radius_m;
+    let r_p = load_radius_m;
     let mut radii: Vec<f64> = flank.iter().map(|f| radius(f.node)).collect();
     radii.sort_by(f64::total_cmp);
     radii.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    let above = radii.iter().position(|&r| r >= r_p).ok_or("no flank row above the pitch circle")?;
+    let above = radii.iter().position(|&r| r >= r_p).ok_or(format!("no flank row above radius {r_p} m"))?;
     if above == 0 {
-        return Err("no flank row below the pitch circle".into());
+        return Err(format!("no flank row below radius {r_p} m"));
     }
     let (r_lo, r_hi) = (radii[above - 1], radii[above]);
     let w_hi = (r_p - r_lo) / (r_hi - r_lo);
@@ -63,21 +73,41 @@ pub fn single_tooth_compliance(
     spec: &MeshSpec,
     formulation: Formulation,
 ) -> Result<ToothCompliance, String> {
+    let along = tooth_compliance_along_profile(pair, gear, spec, formulation, &[gear.pitch_radius_m])?;
+    Ok(along[0])
+}
+
+/// The single-tooth compliance with the line load at each of `load_radii_m` in turn: one
+/// factorization, one solve per radius. How it grows from the pitch circle toward the tip is the
+/// bending the potential-energy method predicts, and it is what makes a tooth pair softer at
+/// the ends of the path of contact.
+pub fn tooth_compliance_along_profile(
+    pair: &GearPair,
+    gear: &Gear,
+    spec: &MeshSpec,
+    formulation: Formulation,
+    load_radii_m: &[f64],
+) -> Result<Vec<ToothCompliance>, String> {
     let model = ClampedGear::new(pair, gear, spec, formulation);
     let (k, dofs) = (&model.stiffness, &model.dofs);
-    let total_force = 1000.0;
-    let load = pitch_line_load(&model.mesh, gear, spec.axial_slices, total_force)?;
-    let f = dofs.load_vector(&load);
     let chol = model.factorize()?;
-    let u = chol.solve(&f);
-    let residual = relative_residual(k, &u, &f);
-    if residual > 1e-8 {
-        return Err(format!("Cholesky residual {residual:e} too large"));
-    }
-    let work: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
-    Ok(ToothCompliance {
-        dofs: dofs.n_free,
-        compliance_per_width: work / (total_force * total_force) * pair.face_width_m,
-        load_radius_m: gear.pitch_radius_m,
-    })
+    let total_force = 1000.0;
+    load_radii_m
+        .iter()
+        .map(|&radius| {
+            let load = line_load_at_radius(&model.mesh, spec.axial_slices, radius, total_force)?;
+            let f = dofs.load_vector(&load);
+            let u = chol.solve(&f);
+            let residual = relative_residual(k, &u, &f);
+            if residual > 1e-8 {
+                return Err(format!("Cholesky residual {residual:e} too large"));
+            }
+            let work: f64 = f.iter().zip(&u).map(|(a, b)| a * b).sum();
+            Ok(ToothCompliance {
+                dofs: dofs.n_free,
+                compliance_per_width: work / (total_force * total_force) * pair.face_width_m,
+                load_radius_m: radius,
+            })
+        })
+        .collect()
 }
