@@ -2,25 +2,17 @@
 //! and the fill of each reported; and reuse of the symbolic factorization on a matrix with the
 //! same pattern (2K must give half the displacement, a closed form).
 
+mod common;
+
 use faer::sparse::{SparseColMat, Triplet};
 use gearfmu::fe::assembly::{relative_residual, Cholesky};
 use gearfmu::fe::clamped_gear::ClampedGear;
-use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::tooth_stiffness::pitch_line_load;
-use gearfmu::gear::{GearPair, PairSpec};
 
 #[test]
 fn nested_dissection_factor_solves_like_amd_and_symbolic_reuse_works() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
-    let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let spec = MeshSpec {
-        elements_across_tooth: 6,
-        elements_along_profile: 12,
-        elements_in_rim: 6,
-        axial_slices: 6,
-        ..Default::default()
-    };
+    let (p, spec) = (common::kurokawa_spur(), common::medium_mesh(6));
     let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
     let k = &model.stiffness;
     let f = model.dofs.load_vector(&pitch_line_load(&model.mesh, &p.gear1, spec.axial_slices, 1000.0).unwrap());

@@ -2,26 +2,18 @@
 //! wheel, against two independent references: the potential-energy method's tooth compliance
 //! (beam theory + Sainsot's foundation, `dynamics::mesh_stiffness`) and ISO 6336-1's c′_th.
 
+mod common;
+
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::mesh_stiffness::tooth_compliance_per_width;
 use gearfmu::fe::gear_mesh::{mesh_gear, MeshSpec};
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::tooth_stiffness::{single_tooth_compliance, tooth_compliance_along_profile};
-use gearfmu::gear::{GearPair, PairSpec};
+use gearfmu::gear::GearPair;
 
-/// The Kurokawa spur pair on a mesh finer than the default in-plane (6 across, 12 along the
-/// profile, 6 in the rim): FE/PEM at the pitch point is within 1 % there (BENCHMARKS.md).
+/// The Kurokawa spur pair on the medium mesh (4 axial slices).
 fn kurokawa_spur_on_a_medium_mesh() -> (GearPair, MeshSpec) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
-    let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let spec = MeshSpec {
-        elements_across_tooth: 6,
-        elements_along_profile: 12,
-        elements_in_rim: 6,
-        axial_slices: 4,
-        ..Default::default()
-    };
-    (p, spec)
+    (common::kurokawa_spur(), common::medium_mesh(4))
 }
 
 #[test]

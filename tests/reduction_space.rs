@@ -5,27 +5,19 @@
 //! (a) all global attachment modes — superposition of per-node modes — and (b) the compressed
 //! space at several p_en.
 
+mod common;
+
 use faer::Mat;
 use gearfmu::fe::assembly::{self, Cholesky};
 use gearfmu::fe::clamped_gear::ClampedGear;
-use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::tooth_stiffness::pitch_line_load;
-use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::rom::attachment::{global_attachment_modes, total_and_global_response};
 use gearfmu::rom::svd::compress;
 
 #[test]
 fn compressed_global_attachment_space_carries_the_line_load() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
-    let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
-    let spec = MeshSpec {
-        elements_across_tooth: 6,
-        elements_along_profile: 12,
-        elements_in_rim: 6,
-        axial_slices: 4,
-        ..Default::default()
-    };
+    let (p, spec) = (common::kurokawa_spur(), common::medium_mesh(4));
     let depth = 3e-3;
     let model = ClampedGear::new(&p, &p.gear1, &spec, Formulation::IncompatibleModes);
     let (gm, dofs, material, k) = (&model.mesh, &model.dofs, &model.material, &model.stiffness);

@@ -1,0 +1,22 @@
+//! Set-ups several FE test files share.
+
+use gearfmu::fe::gear_mesh::MeshSpec;
+use gearfmu::gear::{GearPair, PairSpec};
+
+/// The Kurokawa spur pair of `examples/kurokawa_spur.toml`.
+pub fn kurokawa_spur() -> GearPair {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
+    GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap()
+}
+
+/// A mesh finer than the default in-plane: 6 across the tooth, 12 along the profile, 6 in the
+/// rim (FE/PEM at the pitch point is within 1 % there, BENCHMARKS.md).
+pub fn medium_mesh(axial_slices: usize) -> MeshSpec {
+    MeshSpec {
+        elements_across_tooth: 6,
+        elements_along_profile: 12,
+        elements_in_rim: 6,
+        axial_slices,
+        ..Default::default()
+    }
+}
