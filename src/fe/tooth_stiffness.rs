@@ -1,8 +1,9 @@
 //! Single-tooth compliance by finite elements: the gear clamped at the bore, a line load normal
-//! to one flank along the face at the pitch circle, and the deflection along the load (the work
-//! conjugate: fᵀu/|F|²). It contains the local deformation under the line load as far as the mesh
-//! resolves it (a line load is log-singular in elasticity, so this part grows slowly with
-//! refinement; the analytic Hertz term of the PMOR-Hertz method exists to replace it).
+//! to one flank along the face (at the pitch circle, or at any radius of the meshed flank), and
+//! the deflection along the load (the work conjugate: fᵀu/|F|²). It contains the local
+//! deformation under the line load as far as the mesh resolves it (a line load is log-singular in
+//! elasticity, so this part grows slowly with refinement; the analytic Hertz term of the
+//! PMOR-Hertz method exists to replace it).
 
 use super::assembly::relative_residual;
 use super::clamped_gear::ClampedGear;
