@@ -4,18 +4,22 @@
 //! that says which, so a stale or damaged FMU fails at instantiate, never later.
 
 use crate::dynamics::lumped::LumpedMesh;
+use crate::dynamics::pmor::model::PmorModel;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = b"GEARFMU\0";
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 pub const FILE_NAME: &str = "model.bin";
 
-/// Which fidelity level the FMU carries. The FE-based PMOR-Hertz model joins here later.
+/// Which fidelity level the FMU carries.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ModelKind {
+    /// Rigid gears on a potential-energy mesh law (`dynamics::lumped`).
     Lumped(LumpedMesh),
+    /// The FE-based reduced pair in floating frames (`dynamics::pmor`).
+    PmorHertz(Box<PmorModel>),
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

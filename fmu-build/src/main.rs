@@ -34,8 +34,42 @@ struct Cli {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum ModelChoice {
+    /// The FE-based reduced pair (PMOR-Hertz): eigenmodes + global contact shapes per gear in
+    /// floating frames, Hertz contact between the deformed flanks.
+    PmorHertz,
     /// Rigid gears, potential-energy mesh stiffness, backlash (fast; the reference level).
     Lumped,
+}
+
+/// Options of the PMOR-Hertz build (`fmu-build build --model pmor-hertz`).
+#[derive(clap::Args, Clone)]
+struct RomOptions {
+    /// Fixed-bore eigenmodes per gear n_k (raised to the end of a cluster of the cyclic spectrum).
+    #[arg(long, default_value_t = 20)]
+    modes: usize,
+    /// Angular samples of the global contact shapes per mesh cycle n_θ.
+    #[arg(long, default_value_t = 40)]
+    angles: usize,
+    /// Torque levels on gear 1 of the static analyses (N·m), comma-separated: n_t shapes per sample.
+    #[arg(long, value_delimiter = ',', default_value = "150,250")]
+    rom_torques_nm: Vec<f64>,
+    /// Depth h (mm) of the partial models and of the Hertz approach.
+    #[arg(long, default_value_t = 3.0)]
+    depth_mm: f64,
+    /// Share of the deformation energy the SVD of the attachment modes keeps.
+    #[arg(long, default_value_t = 0.9999)]
+    p_en: f64,
+    /// Interpolation of the shapes in the gear angle.
+    #[arg(long, value_enum, default_value = "catmull-rom")]
+    interpolation: InterpolationChoice,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum InterpolationChoice {
+    /// C¹ cubic (Catmull–Rom) over the periodic samples.
+    CatmullRom,
+    /// The paper's linear interpolation (C⁰).
+    Linear,
 }
 
 #[derive(Subcommand)]
@@ -45,11 +79,15 @@ enum Command {
         spec: PathBuf,
         #[arg(short, long)]
         output: PathBuf,
-        #[arg(long, value_enum, default_value = "lumped")]
+        #[arg(long, value_enum, default_value = "pmor-hertz")]
         model: ModelChoice,
         /// The FMU binary (cdylib); default: libgearfmu.so next to this executable.
         #[arg(long)]
         library: Option<PathBuf>,
+        #[command(flatten)]
+        rom: RomOptions,
+        #[command(flatten)]
+        resolution: Resolution,
     },
     /// Print the pair's kinematics and mesh figures; optionally dump the lumped mesh as JSON.
     Inspect {
@@ -295,8 +333,15 @@ fn default_library() -> Result<PathBuf> {
     Ok(dir.join("libgearfmu.so"))
 }
 
-fn build(spec: &Path, output: &Path, model: ModelChoice, library: Option<PathBuf>) -> Result<()> {
-    let pair = load_pair(spec)?;
+fn build(
+    spec: &Path,
+    output: &Path,
+    model: ModelChoice,
+    library: Option<PathBuf>,
+    rom: &RomOptions,
+    resolution: Resolution,
+) -> Result<()> {
+    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     let library = match library {
         Some(l) => l,
         None => default_library()?,
@@ -306,18 +351,39 @@ fn build(spec: &Path, output: &Path, model: ModelChoice, library: Option<PathBuf
     })?;
     let kind = match model {
         ModelChoice::Lumped => ModelKind::Lumped(LumpedMesh::from_pair(&pair).map_err(anyhow::Error::msg)?),
+        ModelChoice::PmorHertz => ModelKind::PmorHertz(Box::new(build_rom(&pair, &mesh_spec, rom)?)),
     };
     let guid = ModelFile::compute_guid(interface::VARIABLES_TOML, &pair.name, &kind);
-    let ModelKind::Lumped(mesh) = &kind;
-    let starts = [
-        ("inertia_1", mesh.inertia_1_kgm2),
-        ("inertia_2", mesh.inertia_2_kgm2),
-        ("mesh_damping_ratio", mesh.mesh_damping_ratio),
-    ];
-    let description = format!(
-        "Gear pair {} (z {}/{}), lumped model: rigid gears, potential-energy mesh stiffness, backlash",
-        pair.name, pair.gear1.teeth, pair.gear2.teeth
-    );
+    let (starts, description) = match &kind {
+        ModelKind::Lumped(mesh) => (
+            [
+                ("inertia_1", mesh.inertia_1_kgm2),
+                ("inertia_2", mesh.inertia_2_kgm2),
+                ("mesh_damping_ratio", mesh.mesh_damping_ratio),
+                ("max_step", gearfmu::dynamics::fmu::LUMPED_DEFAULT_MAX_STEP_S),
+            ],
+            format!(
+                "Gear pair {} (z {}/{}), lumped model: rigid gears, potential-energy mesh stiffness, backlash",
+                pair.name, pair.gear1.teeth, pair.gear2.teeth
+            ),
+        ),
+        ModelKind::PmorHertz(m) => (
+            [
+                ("inertia_1", m.gears[0].polar_inertia_kgm2),
+                ("inertia_2", m.gears[1].polar_inertia_kgm2),
+                ("mesh_damping_ratio", m.shape_damping_ratio),
+                ("max_step", gearfmu::dynamics::fmu::PMOR_DEFAULT_MAX_STEP_S),
+            ],
+            format!(
+                "Gear pair {} (z {}/{}), PMOR-Hertz model: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), Hertz contact",
+                pair.name,
+                pair.gear1.teeth,
+                pair.gear2.teeth,
+                m.gears[0].elastic_size() + 1,
+                m.gears[1].elastic_size() + 1
+            ),
+        ),
+    };
     let xml = model_description::write(
         &interface::variables(),
         &model_description::ModelFacts {
@@ -345,6 +411,48 @@ fn build(spec: &Path, output: &Path, model: ModelChoice, library: Option<PathBuf
     zip.finish()?;
     println!("wrote {} (GUID {guid})", output.display());
     Ok(())
+}
+
+/// The offline PMOR-Hertz build: FE models, eigenmodes, static contact shapes, invariants.
+fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearfmu::dynamics::pmor::model::PmorModel> {
+    use gearfmu::dynamics::pmor::model::Interpolation;
+    use gearfmu::rom::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions};
+    let options = DynamicBuildOptions {
+        modes: rom.modes,
+        angles: rom.angles,
+        rom_torques_nm: rom.rom_torques_nm.clone(),
+        depth_m: rom.depth_mm * 1e-3,
+        p_en: rom.p_en,
+        interpolation: match rom.interpolation {
+            InterpolationChoice::CatmullRom => Interpolation::CatmullRom,
+            InterpolationChoice::Linear => Interpolation::Linear,
+        },
+        ..Default::default()
+    };
+    let started = std::time::Instant::now();
+    let bar = spinner("PMOR-Hertz build".into());
+    let (model, report) = build_dynamic_model(pair, mesh, &options, |m| bar.set_message(m)).map_err(anyhow::Error::msg)?;
+    bar.finish_and_clear();
+    for i in 0..2 {
+        let g = &model.gears[i];
+        let hz = &report.modes_hz[i];
+        println!(
+            "gear {}: {} eigenmodes ({:.0} … {:.0} Hz) + {} shapes × {} angles; span Φ invariance residual {:.1e}; shape closure residual {:.1e}; polar inertia {:.6e} kg·m² (exact {:.6e}); SVD kept {}",
+            i + 1,
+            g.modes(),
+            hz[0],
+            hz[hz.len() - 1],
+            g.shapes,
+            g.samples,
+            report.invariance_residual[i],
+            report.closure_residual[i],
+            report.polar_inertia_kgm2[i].0,
+            report.polar_inertia_kgm2[i].1,
+            report.n_sv[i],
+        );
+    }
+    println!("offline build {:.1} s", started.elapsed().as_secs_f64());
+    Ok(model)
 }
 
 fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
@@ -571,7 +679,9 @@ fn tooth_stiffness_command(spec: &Path, resolution: Resolution) -> Result<()> {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Build { spec, output, model, library } => build(&spec, &output, model, library),
+        Command::Build { spec, output, model, library, rom, resolution } => {
+            build(&spec, &output, model, library, &rom, resolution)
+        }
         Command::Inspect { spec, json } => inspect(&spec, json),
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),

@@ -34,7 +34,7 @@ pub struct Body {
 }
 
 /// The load–approach relation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum ApproachLaw {
     /// Weber, per body, referred to each body's reference depth (dimensionally consistent).
     #[default]
@@ -92,6 +92,26 @@ impl LineContact {
         }
         let b = self.half_width(force_n);
         self.terms().iter().map(|&(a, k, c)| a * force_n * ((k / b).ln() - c)).sum()
+    }
+
+    /// The complementary energy W*(P) = ∫₀^P δ(p) dp. With δ = Σ aᵢ p (ln(kᵢ/b(p)) − cᵢ) and
+    /// b ∝ √p: W* = Σ aᵢ P²/2 · (ln(kᵢ/b) − cᵢ + ¼). The contact potential at approach α is its
+    /// Legendre transform W(α) = P·α − W*(P) with δ(P) = α (the dynamics' energy balance).
+    pub fn complementary_energy(&self, force_n: f64) -> f64 {
+        if force_n <= 0.0 {
+            return 0.0;
+        }
+        let b = self.half_width(force_n);
+        self.terms().iter().map(|&(a, k, c)| 0.5 * a * force_n * force_n * ((k / b).ln() - c + 0.25)).sum()
+    }
+
+    /// ∂W/∂R at fixed approach, R the effective radius: the potential's dependence on the
+    /// geometry (Legendre: −∂W*/∂R at fixed P; b ∝ √R gives Σ aᵢ P²/(4R)).
+    pub fn potential_radius_derivative(&self, force_n: f64) -> f64 {
+        if force_n <= 0.0 {
+            return 0.0;
+        }
+        self.terms().iter().map(|&(a, _, _)| a).sum::<f64>() * force_n * force_n / (4.0 * self.effective_radius())
     }
 
     /// dδ/dP (the contact compliance); infinite at P → 0 (the logarithmic singularity of line
@@ -165,6 +185,27 @@ mod tests {
             reference_depth_m: 4.7e-3,
         };
         LineContact { length_m: 0.015, bodies: [body(0.0215), body(0.0318)], law: ApproachLaw::Weber }
+    }
+
+    /// Quadrature: the closed-form complementary energy equals ∫₀^P δ(p) dp (Simpson on a
+    /// √-graded grid, which resolves the p·ln p start), for both laws.
+    #[test]
+    fn complementary_energy_is_the_integral_of_the_approach() {
+        for law in [ApproachLaw::Weber, ApproachLaw::PaperEq20] {
+            let c = LineContact { law, ..steel_pair() };
+            let p = 4000.0;
+            let n = 4000;
+            let mut integral = 0.0;
+            for i in 0..n {
+                let (s0, s1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+                let sm = 0.5 * (s0 + s1);
+                // p = P s², dp = 2 P s ds
+                let f = |s: f64| c.hertz_approach(p * s * s) * 2.0 * p * s;
+                integral += (s1 - s0) / 6.0 * (f(s0) + 4.0 * f(sm) + f(s1));
+            }
+            let closed = c.complementary_energy(p);
+            assert!(((closed - integral) / closed).abs() < 1e-9, "{law:?}: {closed} vs {integral}");
+        }
     }
 
     /// Closed form: b = √(4PR/(πlE*)) and p₀ = 2P/(πbl) (Johnson, Contact Mechanics, Eq. 4.43).

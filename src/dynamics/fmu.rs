@@ -1,9 +1,12 @@
 //! The gear pair behind the FMI layer: maps the interface's variables (by name, from
-//! `modelDescription/variables.toml`) to the physics, and steps the model with RK4 sub-steps no
-//! longer than `max_step`. Everything that changes lives in [`GearPairState`], so an FMU state
-//! is a copy of it.
+//! `modelDescription/variables.toml`) to the physics of the model kind the FMU carries (the
+//! lumped model or the PMOR-Hertz reduced pair), and steps it with RK4 sub-steps no longer than
+//! `max_step`. Everything that changes lives in [`GearPairState`], so an FMU state is a copy of it.
 
 use super::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
+use super::pmor::model::PmorModel;
+use super::pmor::{PmorDynamics, PmorOutputs, PmorState};
+use crate::contact::mesh_kinematics::PairPlacement;
 use crate::fmi2::{Model, Phase};
 use crate::interface;
 use crate::model_file::{ModelFile, ModelKind};
@@ -103,18 +106,38 @@ pub struct GearPairState {
     pub start: LumpedState,
     pub max_step_s: f64,
     pub params: LumpedParameters,
+    /// The lumped model's state; for the PMOR-Hertz model it carries the start values only.
     pub mech: LumpedState,
+    /// The PMOR-Hertz state (after initialization).
+    pub pmor: Option<PmorState>,
+}
+
+/// The physics an FMU carries.
+pub enum Physics {
+    Lumped(LumpedMesh),
+    PmorHertz { model: Box<PmorModel>, place: PairPlacement },
 }
 
 pub struct GearPairFmu {
-    pub mesh: LumpedMesh,
+    pub physics: Physics,
     /// (value reference, variable), from variables.toml.
     lookup: Vec<(u32, Var)>,
 }
 
+/// The PMOR-Hertz model's internal step bound by default (s): the paper's RK4 step (Table 10).
+pub const PMOR_DEFAULT_MAX_STEP_S: f64 = 1e-6;
+/// The lumped model's (s).
+pub const LUMPED_DEFAULT_MAX_STEP_S: f64 = 1e-5;
+
 impl GearPairFmu {
     pub fn from_model_file(file: ModelFile) -> Result<Self, String> {
-        let ModelKind::Lumped(mesh) = file.model;
+        let physics = match file.model {
+            ModelKind::Lumped(mesh) => Physics::Lumped(mesh),
+            ModelKind::PmorHertz(model) => {
+                let place = PairPlacement::new(&model.pair);
+                Physics::PmorHertz { model, place }
+            }
+        };
         let mut lookup = Vec::new();
         for v in interface::variables() {
             let var = Var::ALL
@@ -123,7 +146,7 @@ impl GearPairFmu {
                 .ok_or_else(|| format!("interface variable {} has no physics in this binary", v.name))?;
             lookup.push((v.value_reference, var));
         }
-        Ok(GearPairFmu { mesh, lookup })
+        Ok(GearPairFmu { physics, lookup })
     }
 
     fn var(&self, vr: u32) -> Result<Var, String> {
@@ -134,8 +157,59 @@ impl GearPairFmu {
             .ok_or_else(|| format!("unknown value reference {vr}"))
     }
 
-    pub fn lumped(&self, state: &GearPairState) -> LumpedModel<'_> {
-        LumpedModel::new(&self.mesh, state.params)
+    /// The lumped mesh, if this FMU carries the lumped model.
+    pub fn lumped_mesh(&self) -> Option<&LumpedMesh> {
+        match &self.physics {
+            Physics::Lumped(mesh) => Some(mesh),
+            Physics::PmorHertz { .. } => None,
+        }
+    }
+
+    /// Base radii and the default parameters of the model kind.
+    fn base_radii(&self) -> [f64; 2] {
+        match &self.physics {
+            Physics::Lumped(m) => [m.base_radius_1_m, m.base_radius_2_m],
+            Physics::PmorHertz { model, .. } => [model.gears[0].base_radius_m, model.gears[1].base_radius_m],
+        }
+    }
+
+    /// The PMOR-Hertz dynamics with an instance's parameters: the FE inertia of each gear plus
+    /// the rigid inertia the instance adds at its bore (inertia_i above the FE value), and the
+    /// shape damping ratio from mesh_damping_ratio.
+    pub fn pmor<'a>(&'a self, model: &'a PmorModel, place: &'a PairPlacement, s: &GearPairState) -> PmorDynamics<'a> {
+        let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+        PmorDynamics {
+            model,
+            place,
+            damping: model.damping(model.modal_damping_ratio, s.params.mesh_damping_ratio),
+            added_inertia_kgm2: [s.params.inertia_1_kgm2 - fe[0], s.params.inertia_2_kgm2 - fe[1]],
+        }
+    }
+
+    fn pmor_outputs(&self, s: &GearPairState) -> Result<Option<(PmorOutputs, PmorState)>, String> {
+        let Physics::PmorHertz { model, place } = &self.physics else { return Ok(None) };
+        let state = match &s.pmor {
+            Some(p) => p.clone(),
+            None => model.initial_state([s.mech.theta_1, s.mech.theta_2], [s.mech.omega_1, s.mech.omega_2]),
+        };
+        Ok(Some((self.pmor(model, place, s).outputs(&state)?, state)))
+    }
+}
+
+impl GearPairFmu {
+    /// An inertia parameter: positive; for the PMOR-Hertz model not below the FE gear's own
+    /// (the excess is rigid inertia at the bore: the hub and shaft share).
+    fn inertia(&self, name: &str, gear: usize, value: f64) -> Result<f64, String> {
+        let value = positive(name, value)?;
+        if let Physics::PmorHertz { model, .. } = &self.physics {
+            let fe = model.gears[gear].polar_inertia_kgm2;
+            if value < fe * (1.0 - 1e-12) {
+                return Err(format!(
+                    "{name} = {value} kg·m² is below the FE gear's own inertia {fe} kg·m²: the PMOR-Hertz model takes the gear's inertia from its mesh and adds only the excess (hub, shaft) at the bore"
+                ));
+            }
+        }
+        Ok(value)
     }
 }
 
@@ -160,13 +234,18 @@ impl Model for GearPairFmu {
 
     fn initial_state(&self) -> GearPairState {
         let start = LumpedState::default();
-        GearPairState {
-            torques_nm: [0.0; 2],
-            start,
-            max_step_s: 1e-5,
-            params: LumpedParameters::defaults(&self.mesh),
-            mech: start,
-        }
+        let (max_step_s, params) = match &self.physics {
+            Physics::Lumped(mesh) => (LUMPED_DEFAULT_MAX_STEP_S, LumpedParameters::defaults(mesh)),
+            Physics::PmorHertz { model, .. } => (
+                PMOR_DEFAULT_MAX_STEP_S,
+                LumpedParameters {
+                    inertia_1_kgm2: model.gears[0].polar_inertia_kgm2,
+                    inertia_2_kgm2: model.gears[1].polar_inertia_kgm2,
+                    mesh_damping_ratio: model.shape_damping_ratio,
+                },
+            ),
+        };
+        GearPairState { torques_nm: [0.0; 2], start, max_step_s, params, mech: start, pmor: None }
     }
 
     fn set_real(&self, s: &mut GearPairState, vr: u32, value: f64, phase: Phase) -> Result<(), String> {
@@ -182,8 +261,8 @@ impl Model for GearPairFmu {
             Var::W1Start => s.start.omega_1 = value,
             Var::W2Start => s.start.omega_2 = value,
             Var::MaxStep => s.max_step_s = positive("max_step", value)?,
-            Var::Inertia1 => s.params.inertia_1_kgm2 = positive("inertia_1", value)?,
-            Var::Inertia2 => s.params.inertia_2_kgm2 = positive("inertia_2", value)?,
+            Var::Inertia1 => s.params.inertia_1_kgm2 = self.inertia("inertia_1", 0, value)?,
+            Var::Inertia2 => s.params.inertia_2_kgm2 = self.inertia("inertia_2", 1, value)?,
             Var::MeshDampingRatio => {
                 if !(0.0..1.0).contains(&value) {
                     return Err(format!("mesh_damping_ratio must be in [0, 1), got {value}"));
@@ -195,24 +274,43 @@ impl Model for GearPairFmu {
         // Until initialization ends the mechanical state follows the start values.
         if matches!(phase, Phase::Instantiated | Phase::InitializationMode) {
             s.mech = s.start;
+            s.pmor = None;
         }
         Ok(())
     }
 
     fn get_real(&self, s: &GearPairState, vr: u32) -> Result<f64, String> {
-        let model = self.lumped(s);
-        let mesh = model.mesh_state(&s.mech);
-        Ok(match self.var(vr)? {
+        let var = self.var(vr)?;
+        let rb = self.base_radii();
+        // The mechanical outputs of the model kind: angles, speeds, force, stiffness.
+        let (theta, omega, force, stiffness) = match &self.physics {
+            Physics::Lumped(mesh) => {
+                let m = LumpedModel::new(mesh, s.params).mesh_state(&s.mech);
+                ([s.mech.theta_1, s.mech.theta_2], [s.mech.omega_1, s.mech.omega_2], m.force_n, m.stiffness_n_per_m)
+            }
+            Physics::PmorHertz { .. } => {
+                let needs_contact = matches!(var, Var::MeshForce | Var::MeshStiffness);
+                match &s.pmor {
+                    Some(p) if !needs_contact => (p.theta, p.omega, f64::NAN, f64::NAN),
+                    _ => {
+                        let (out, p) = self.pmor_outputs(s)?.expect("PMOR-Hertz physics");
+                        (p.theta, p.omega, out.contact.normal_force_n, out.contact.tangent_stiffness_n_per_m)
+                    }
+                }
+            }
+        };
+        let te = rb[0] * theta[0] - rb[1] * theta[1];
+        Ok(match var {
             Var::Tau1 => s.torques_nm[0],
             Var::Tau2 => s.torques_nm[1],
-            Var::Phi1 => s.mech.theta_1,
-            Var::Phi2 => s.mech.theta_2,
-            Var::W1 => s.mech.omega_1,
-            Var::W2 => s.mech.omega_2,
-            Var::Dte => mesh.transmission_error_m,
-            Var::DteAngle => mesh.transmission_error_m / self.mesh.base_radius_2_m,
-            Var::MeshForce => mesh.force_n,
-            Var::MeshStiffness => mesh.stiffness_n_per_m,
+            Var::Phi1 => theta[0],
+            Var::Phi2 => theta[1],
+            Var::W1 => omega[0],
+            Var::W2 => omega[1],
+            Var::Dte => te,
+            Var::DteAngle => te / rb[1],
+            Var::MeshForce => force,
+            Var::MeshStiffness => stiffness,
             Var::Phi1Start => s.start.theta_1,
             Var::Phi2Start => s.start.theta_2,
             Var::W1Start => s.start.omega_1,
@@ -227,18 +325,36 @@ impl Model for GearPairFmu {
 
     fn get_integer(&self, s: &GearPairState, vr: u32) -> Result<i32, String> {
         match self.var(vr)? {
-            Var::ContactPairs => Ok(self.lumped(s).mesh_state(&s.mech).pairs_in_contact as i32),
+            Var::ContactPairs => match &self.physics {
+                Physics::Lumped(mesh) => Ok(LumpedModel::new(mesh, s.params).mesh_state(&s.mech).pairs_in_contact as i32),
+                Physics::PmorHertz { .. } => Ok(self.pmor_outputs(s)?.expect("PMOR-Hertz physics").0.contact.pairs_in_contact as i32),
+            },
             other => Err(format!("value reference {vr} ({}) is not an Integer", other.name())),
         }
     }
 
     fn exit_initialization(&self, s: &mut GearPairState) -> Result<(), String> {
         s.mech = s.start;
+        if let Physics::PmorHertz { model, place } = &self.physics {
+            let start = model.initial_state([s.start.theta_1, s.start.theta_2], [s.start.omega_1, s.start.omega_2]);
+            // The start must be a state the model can evaluate (e.g. no coast-flank contact).
+            self.pmor(model, place, s).outputs(&start)?;
+            s.pmor = Some(start);
+        }
         Ok(())
     }
 
     fn do_step(&self, s: &mut GearPairState, h: f64) -> Result<(), String> {
-        let model = self.lumped(s);
+        let mesh = match &self.physics {
+            Physics::Lumped(mesh) => mesh,
+            Physics::PmorHertz { model, place } => {
+                let mut state = s.pmor.clone().ok_or("the PMOR-Hertz state is not initialized")?;
+                self.pmor(model, place, s).advance(&mut state, s.torques_nm, h, s.max_step_s)?;
+                s.pmor = Some(state);
+                return Ok(());
+            }
+        };
+        let model = LumpedModel::new(mesh, s.params);
         model.advance(&mut s.mech, s.torques_nm, h, s.max_step_s);
         let m = &s.mech;
         if [m.theta_1, m.omega_1, m.theta_2, m.omega_2].iter().all(|x| x.is_finite()) {

@@ -6,3 +6,4 @@ pub mod iso6336;
 pub mod lumped;
 pub mod mesh_law;
 pub mod mesh_stiffness;
+pub mod pmor;

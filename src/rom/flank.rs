@@ -9,7 +9,7 @@
 use crate::fe::gear_mesh::GearMesh;
 
 /// The contact-side flank nodes of some teeth of one gear.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FlankGrid {
     /// Teeth on the grid (FE tooth indices).
     pub teeth: Vec<usize>,

@@ -25,10 +25,15 @@ import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
-# name used in the tests -> (spec, FMU file under target/fmu)
+# name used in the tests -> (spec, FMU file under target/fmu, fmu-build model kind).
+# The lumped FMUs carry the mesh-law tests; every FMI-level test (validation, FMU state, bad
+# inputs, the second client) also runs against the PMOR-Hertz FMU of the spur pair.
 GEAR_SPECS = {
-    "spur": ("examples/kurokawa_spur.toml", "KurokawaSpur.fmu"),
-    "helical": ("examples/kurokawa_helical.toml", "KurokawaHelical.fmu"),
+    "spur": ("examples/kurokawa_spur.toml", "KurokawaSpur.fmu", "lumped"),
+    "helical": ("examples/kurokawa_helical.toml", "KurokawaHelical.fmu", "lumped"),
+}
+PMOR_SPECS = {
+    "spur-pmor": ("examples/kurokawa_spur.toml", "KurokawaSpurPmor.fmu", "pmor-hertz"),
 }
 
 REAL_OUTPUTS = ("phi_1", "phi_2", "w_1", "w_2", "dte", "dte_angle", "mesh_force", "mesh_stiffness")
@@ -59,6 +64,7 @@ class GearCase:
     mesh_json_path: Path   # fmu-build inspect --json dump
     mesh: dict             # the parsed dump
     unzip_dir: Path        # one shared extraction: all instances load the same .so
+    kind: str = "lumped"   # the fmu-build model kind: "lumped" or "pmor-hertz"
 
 
 @pytest.fixture(scope="session")
@@ -67,19 +73,26 @@ def gear_fmus(tmp_path_factory) -> dict[str, GearCase]:
 
     out_dir = tmp_path_factory.mktemp("gearfmu")
     cases = {}
-    for name, (spec, fmu_file) in GEAR_SPECS.items():
+    for name, (spec, fmu_file, kind) in {**GEAR_SPECS, **PMOR_SPECS}.items():
         fmu_path = REPO_ROOT / "target" / "fmu" / fmu_file
-        _fmu_build("build", spec, "-o", str(fmu_path.relative_to(REPO_ROOT)))
+        _fmu_build("build", spec, "-o", str(fmu_path.relative_to(REPO_ROOT)), "--model", kind)
         mesh_json_path = out_dir / f"{name}_mesh.json"
         _fmu_build("inspect", spec, "--json", str(mesh_json_path))
         mesh = json.loads(mesh_json_path.read_text())
         unzip_dir = Path(extract(str(fmu_path), unzipdir=out_dir / f"{name}_unzipped"))
-        cases[name] = GearCase(name, REPO_ROOT / spec, fmu_path, mesh_json_path, mesh, unzip_dir)
+        cases[name] = GearCase(name, REPO_ROOT / spec, fmu_path, mesh_json_path, mesh, unzip_dir, kind)
     yield cases
 
 
 @pytest.fixture(params=sorted(GEAR_SPECS))
 def gear_case(request, gear_fmus) -> GearCase:
+    """The lumped FMUs (their mesh law is what the mesh-dump tests check)."""
+    return gear_fmus[request.param]
+
+
+@pytest.fixture(params=sorted(GEAR_SPECS) + sorted(PMOR_SPECS))
+def fmi_case(request, gear_fmus) -> GearCase:
+    """Every FMU kind, for the tests of FMI behaviour that must hold whatever the model."""
     return gear_fmus[request.param]
 
 

@@ -46,9 +46,9 @@ def test_logger_proxy_delivers_formatted_text(log_capture):
 
 
 @pytest.mark.parametrize("input_name", ["tau_1", "tau_2"])
-def test_nan_input_is_rejected_logged_and_recoverable(gear_case, make_slave, schedule, log_capture, input_name):
-    name = f"nan_{gear_case.name}_{input_name}"
-    slave = make_slave(gear_case, name, callbacks=log_capture.callbacks, logging_on=True)
+def test_nan_input_is_rejected_logged_and_recoverable(fmi_case, make_slave, schedule, log_capture, input_name):
+    name = f"nan_{fmi_case.name}_{input_name}"
+    slave = make_slave(fmi_case, name, callbacks=log_capture.callbacks, logging_on=True)
     _run(slave, schedule(N_WARMUP))
     t0 = _end_time(schedule(N_WARMUP))
     state = slave.fmu.getFMUstate()

@@ -32,8 +32,8 @@ def _warm_up(slave, schedule, seed=0.0):
     return t
 
 
-def test_get_set_state_replays_identically(gear_case, make_slave, schedule):
-    slave = make_slave(gear_case, "replay")
+def test_get_set_state_replays_identically(fmi_case, make_slave, schedule):
+    slave = make_slave(fmi_case, "replay")
     t0 = _warm_up(slave, schedule)
     state = slave.fmu.getFMUstate()
     first, _ = _run(slave, schedule(N_STEPS, seed=1.0, t0=t0))
@@ -44,8 +44,8 @@ def test_get_set_state_replays_identically(gear_case, make_slave, schedule):
     assert second == first          # tuples of Python floats/ints: exact equality
 
 
-def test_set_state_twice_and_state_survives_further_steps(gear_case, make_slave, schedule):
-    slave = make_slave(gear_case, "replay_twice")
+def test_set_state_twice_and_state_survives_further_steps(fmi_case, make_slave, schedule):
+    slave = make_slave(fmi_case, "replay_twice")
     t0 = _warm_up(slave, schedule)
     state = slave.fmu.getFMUstate()
     runs = []
@@ -56,8 +56,8 @@ def test_set_state_twice_and_state_survives_further_steps(gear_case, make_slave,
     assert runs[0] == runs[1] == runs[2]
 
 
-def test_serialized_state_restores_into_fresh_instance(gear_case, make_slave, schedule):
-    original = make_slave(gear_case, "original")
+def test_serialized_state_restores_into_fresh_instance(fmi_case, make_slave, schedule):
+    original = make_slave(fmi_case, "original")
     t0 = _warm_up(original, schedule)
     state = original.fmu.getFMUstate()
     blob = original.fmu.serializeFMUstate(state)
@@ -65,7 +65,7 @@ def test_serialized_state_restores_into_fresh_instance(gear_case, make_slave, sc
     assert isinstance(blob, bytes) and len(blob) > 0
     expected, _ = _run(original, schedule(N_STEPS, seed=3.0, t0=t0))
 
-    fresh = make_slave(gear_case, "fresh")
+    fresh = make_slave(fmi_case, "fresh")
     restored = fresh.fmu.deSerializeFMUstate(blob)
     fresh.fmu.setFMUstate(restored)
     fresh.fmu.freeFMUstate(restored)
@@ -73,24 +73,24 @@ def test_serialized_state_restores_into_fresh_instance(gear_case, make_slave, sc
     assert got == expected
 
     # Serializing the restored instance's state again gives the same bytes.
-    again = make_slave(gear_case, "again")
+    again = make_slave(fmi_case, "again")
     state_b = again.fmu.deSerializeFMUstate(blob)
     assert again.fmu.serializeFMUstate(state_b) == blob
     again.fmu.freeFMUstate(state_b)
 
 
-def test_two_instances_are_independent(gear_case, make_slave, schedule):
+def test_two_instances_are_independent(fmi_case, make_slave, schedule):
     # Solo runs, one instance alive at a time.
-    solo_a = make_slave(gear_case, "solo_a")
+    solo_a = make_slave(fmi_case, "solo_a")
     expected_a, _ = _run(solo_a, schedule(N_WARMUP + N_STEPS, seed=0.0))
     solo_a.free()
-    solo_b = make_slave(gear_case, "solo_b")
+    solo_b = make_slave(fmi_case, "solo_b")
     expected_b, _ = _run(solo_b, schedule(N_WARMUP + N_STEPS, seed=5.0))
     solo_b.free()
 
     # Interleaved: both alive in one process, stepping alternately.
-    a = make_slave(gear_case, "inst_a")
-    b = make_slave(gear_case, "inst_b")
+    a = make_slave(fmi_case, "inst_a")
+    b = make_slave(fmi_case, "inst_b")
     got_a, got_b = [], []
     for step_a, step_b in zip(schedule(N_WARMUP + N_STEPS, seed=0.0), schedule(N_WARMUP + N_STEPS, seed=5.0)):
         got_a += _run(a, [step_a])[0]

@@ -59,9 +59,9 @@ def run_with_fmi_crate(case, tmp_path) -> np.ndarray:
     return np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
 
 
-def test_fmpy_and_fmi_crate_agree_bit_for_bit(gear_case, tmp_path):
-    a = run_with_fmpy(gear_case)
-    b = run_with_fmi_crate(gear_case, tmp_path)
+def test_fmpy_and_fmi_crate_agree_bit_for_bit(fmi_case, tmp_path):
+    a = run_with_fmpy(fmi_case)
+    b = run_with_fmi_crate(fmi_case, tmp_path)
     assert a.shape == b.shape == (250, 1 + len(OUTPUTS))
     assert np.array_equal(a, b), f"max difference {np.max(np.abs(a - b))}"
     # And the run is not trivial: gear 2 turned and the mesh carried load.

@@ -1,0 +1,197 @@
+//! Contact of the reduced pair: the statics' contact search (`contact::mesh_kinematics`), Hertz
+//! law (`contact::hertz`) and pressure band (`rom::flank`), on the deformed flanks
+//! u = P^k·V(ϑ)η of the teeth near the line of action.
+//!
+//! Per tooth pair j and axial section the penetration is α = α₀(θ₁, θ₂) + Σᵢ nᵢᵀuᵢ at the
+//! contact point of the rigid search (the deformation enters along the flank normals, as in the
+//! statics); the force P(α) inverts the load–approach relation; its generalized forces are
+//! P·Vᵀ(band shares) on η (the Hertz pressure band, as in the statics) and −P·∂α/∂θᵢ on the
+//! angles. ∂α/∂θᵢ is a central difference of α at fixed η: it carries the rigid arm, the sliding
+//! of the contact point along the deformed flank and the turning of the shape basis, so the
+//! angle forces are exactly the derivative of the contact potential W = P·α − W*(P) that the
+//! energy balance counts (at a fixed law; the radii of curvature move with θ too).
+//!
+//! A tooth on gear i at pitch anchor kᵢ (θᵢ = kᵢ·pitch + ϑᵢ) carries the field of reference tooth
+//! t + kᵢ: the one-tooth rotation P moves content of tooth t + 1 onto tooth t.
+
+use super::equations::Stencil;
+use super::model::PmorModel;
+use crate::contact::hertz::series_force;
+use crate::contact::mesh_kinematics::{PairPlacement, SectionContact};
+
+/// Angle step of the central differences ∂α/∂θ (rad).
+const ANGLE_STEP: f64 = 1e-7;
+
+/// The kinematic state of one gear that the contact reads.
+pub struct GearPose<'a> {
+    pub theta: f64,
+    pub anchor: i64,
+    pub stencil: Stencil,
+    pub eta: &'a [f64],
+}
+
+/// What the contact puts on the pair.
+#[derive(Debug, Clone, Default)]
+pub struct ContactLoads {
+    /// Generalized forces on (θᵢ, ηᵢ), per gear.
+    pub force: [Vec<f64>; 2],
+    /// Total normal force (N), loaded sections, tooth pairs carrying load.
+    pub normal_force_n: f64,
+    pub pairs_in_contact: u32,
+    /// Contact potential Σ W (J).
+    pub potential_j: f64,
+    /// Σ dP/dα (N/m), the Hertz tangent stiffness of the loaded sections in parallel.
+    pub tangent_stiffness_n_per_m: f64,
+    /// Force per tooth pair (pair index j, N).
+    pub pair_forces: Vec<(i64, f64)>,
+}
+
+/// Shares and normal of a contact point on gear i's reference flank.
+fn reference_point(
+    model: &PmorModel,
+    i: usize,
+    pose: &GearPose,
+    c: &SectionContact,
+) -> Result<(Vec<(usize, f64)>, [f64; 3], usize), String> {
+    let g = &model.gears[i];
+    let z = g.teeth as i64;
+    let tooth = (c.teeth[i] as i64 + pose.anchor).rem_euclid(z) as usize;
+    let shares = g.flank.point_shares(tooth, c.radius_m[i], c.section).ok_or_else(|| {
+        format!("contact on reference tooth {tooth} of gear {}: outside the stored flank rows", i + 1)
+    })?;
+    let n = g.flank.normal(&shares);
+    Ok((shares, n, tooth))
+}
+
+/// n·u at a contact point of gear i (u interpolated from the flank nodes by the shares).
+fn normal_displacement(model: &PmorModel, i: usize, pose: &GearPose, shares: &[(usize, f64)], n: [f64; 3]) -> f64 {
+    let g = &model.gears[i];
+    shares.iter().map(|&(k, w)| w * g.normal_displacement(&pose.stencil, k, n, pose.eta)).sum()
+}
+
+/// Shares with repeated nodes merged (the band's quadrature points fall on a few nodes).
+fn merged(mut shares: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
+    shares.sort_by_key(|s| s.0);
+    let mut out: Vec<(usize, f64)> = Vec::with_capacity(shares.len());
+    for (k, w) in shares {
+        match out.last_mut() {
+            Some(last) if last.0 == k => last.1 += w,
+            _ => out.push((k, w)),
+        }
+    }
+    out
+}
+
+/// The penetration and the effective radius of curvature of pair j, section s, at perturbed
+/// poses (for ∂α/∂θ and ∂R/∂θ).
+fn penetration_at(model: &PmorModel, place: &PairPlacement, poses: [&GearPose; 2], j: i64, section: usize, z_mid: f64) -> Result<Option<(f64, f64)>, String> {
+    let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, section, z_mid) else { return Ok(None) };
+    let radius = c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
+    let mut alpha = c.rigid_penetration_m;
+    for i in 0..2 {
+        let (shares, n, _) = reference_point(model, i, poses[i], &c)?;
+        alpha += normal_displacement(model, i, poses[i], &shares, n);
+    }
+    Ok(Some((alpha, radius)))
+}
+
+/// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂.
+pub fn candidate_pairs(model: &PmorModel, theta2: f64) -> std::ops::RangeInclusive<i64> {
+    let p = &model.pair;
+    let pb = p.base_pitch_m;
+    let half_b = 0.5 * p.face_width_m * p.base_helix_angle_rad.tan().abs();
+    let u0 = p.pitch_point_m() + p.gear2.base_radius_m * theta2;
+    let lo = ((p.path_start_m - 0.6 * pb - half_b - u0) / pb).ceil() as i64;
+    let hi = ((p.path_end_m + 0.6 * pb + half_b - u0) / pb).floor() as i64;
+    lo..=hi
+}
+
+/// Contact loads of the pair; `restage` maps a gear's angle to its stencil (for the differences).
+pub fn contact_loads(
+    model: &PmorModel,
+    place: &PairPlacement,
+    poses: [&GearPose; 2],
+    restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
+) -> Result<ContactLoads, String> {
+    let p = &model.pair;
+    let te = p.gear1.base_radius_m * poses[0].theta - p.gear2.base_radius_m * poses[1].theta;
+    if te < -p.backlash_loa_m {
+        return Err(format!(
+            "the coast flanks touch (transmission error {te:.3e} m beyond the backlash {:.3e} m): back-flank contact is not in the PMOR-Hertz model yet",
+            p.backlash_loa_m
+        ));
+    }
+    let n_e = [poses[0].eta.len(), poses[1].eta.len()];
+    let mut out = ContactLoads { force: [vec![0.0; 1 + n_e[0]], vec![0.0; 1 + n_e[1]]], ..Default::default() };
+    let layers = &model.gears[0].flank.layer_z_m;
+    let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
+    let info = &model.info;
+    let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
+    for j in candidate_pairs(model, poses[1].theta) {
+        let mut pair_force = 0.0;
+        for s in 0..layers.len() - 1 {
+            let z_mid = 0.5 * (layers[s] + layers[s + 1]);
+            let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, s, z_mid) else { continue };
+            let mut alpha = c.rigid_penetration_m;
+            let mut refs = Vec::with_capacity(2);
+            for i in 0..2 {
+                let (shares, n, tooth) = reference_point(model, i, poses[i], &c)?;
+                alpha += normal_displacement(model, i, poses[i], &shares, n);
+                refs.push(tooth);
+            }
+            if alpha <= 0.0 {
+                continue;
+            }
+            let law = c.line_contact(p, layers[s + 1] - layers[s], info.depth_m, info.law);
+            let force = series_force(&law, 0.0, alpha)?;
+            if force <= 0.0 {
+                continue;
+            }
+            // Generalized forces on η: the Hertz band, pushing into each tooth.
+            let beta = law.half_width(force);
+            for i in 0..2 {
+                let g = &model.gears[i];
+                let band = merged(
+                    g.flank.band_shares(refs[i], c.radius_m[i], beta, base[i], s).ok_or("band outside the stored flank")?,
+                );
+                for &(k, w) in &band {
+                    g.basis_row(&poses[i].stencil, k, g.flank.nodes[k].1, &mut tmp[i]);
+                    for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
+                        *f -= force * w * t;
+                    }
+                }
+            }
+            // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
+            // along the penetration's change, plus the potential's change with the radii of
+            // curvature as the contact point travels (the law's geometry).
+            let transverse_radius = c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
+            // ∂W/∂R for the transverse R that `penetration_at` returns (the law's R is R/cos β_b).
+            let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius;
+            for i in 0..2 {
+                let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
+                    let theta = poses[i].theta + sign * ANGLE_STEP;
+                    let pose = GearPose {
+                        theta,
+                        anchor: poses[i].anchor,
+                        stencil: restage(i, theta)?,
+                        eta: poses[i].eta,
+                    };
+                    let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
+                    penetration_at(model, place, both, j, s, z_mid)
+                };
+                let (Some(up), Some(down)) = (shifted(1.0)?, shifted(-1.0)?) else { continue };
+                out.force[i][0] -= force * (up.0 - down.0) / (2.0 * ANGLE_STEP);
+                out.force[i][0] -= dw_dr * (up.1 - down.1) / (2.0 * ANGLE_STEP);
+            }
+            out.normal_force_n += force;
+            out.potential_j += force * alpha - law.complementary_energy(force);
+            out.tangent_stiffness_n_per_m += 1.0 / law.compliance(force);
+            pair_force += force;
+        }
+        if pair_force > 0.0 {
+            out.pairs_in_contact += 1;
+            out.pair_forces.push((j, pair_force));
+        }
+    }
+    Ok(out)
+}

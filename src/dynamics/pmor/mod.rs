@@ -1,0 +1,262 @@
+//! The PMOR-Hertz gear pair in floating frames (paper Sects. 3 and 5.2, design §4.5): per gear
+//! the shaft angle θ and elastic coordinates η = (η_Φ, η_Ψ) on the basis [Φ, Ψ(ϑ)], Hertz contact
+//! between the deformed flanks, integrated by RK4 at a fixed sub-step.
+//!
+//! - [`model`]: the reduced pair as plain data (the model file's content);
+//! - [`interpolation`]: Ψ(ϑ) between the angular samples;
+//! - [`equations`]: one gear's Lagrangian terms (mass matrix, quadratic velocity vector, elastic
+//!   and damping forces);
+//! - [`contact`]: the contact search, Hertz law and band on the deformed flanks;
+//! - this file: the state, the pitch anchors, the right-hand side and the integrator.
+//!
+//! The pitch anchor kᵢ of each gear is part of the state: the stored shapes cover the reference
+//! pitch ϑ ∈ [−Δϑ, pitch + Δϑ), and after every step whose end leaves [0, pitch) the anchor moves
+//! by one and η_Φ is re-expressed through the tooth rotation (η_Φ ← R·η_Φ); the shapes need
+//! nothing, their stored samples already continue periodically.
+
+pub mod contact;
+pub mod equations;
+pub mod interpolation;
+pub mod model;
+
+use crate::contact::mesh_kinematics::PairPlacement;
+use contact::{contact_loads, ContactLoads, GearPose};
+use equations::{gear_terms, Damping, Stencil};
+use model::PmorModel;
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// The state of the reduced pair (plain data: an FMU state is a copy of it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PmorState {
+    pub theta: [f64; 2],
+    pub omega: [f64; 2],
+    /// η = (η_Φ, η_Ψ) and η̇ per gear, in the coordinates of the anchored pitch.
+    pub eta: [Vec<f64>; 2],
+    pub eta_dot: [Vec<f64>; 2],
+    pub anchor: [i64; 2],
+    /// ∫Σ τᵢωᵢ dt and ∫η̇ᵀDη̇ dt (J): the energy balance's external terms.
+    pub input_work_j: f64,
+    pub dissipated_j: f64,
+}
+
+/// Energies and contact at one state.
+#[derive(Debug, Clone, Default)]
+pub struct PmorOutputs {
+    pub kinetic_j: f64,
+    pub elastic_j: f64,
+    pub contact_j: f64,
+    pub contact: ContactLoads,
+}
+
+impl PmorOutputs {
+    pub fn total_energy_j(&self) -> f64 {
+        self.kinetic_j + self.elastic_j + self.contact_j
+    }
+}
+
+/// The reduced pair with what an instance may change.
+pub struct PmorDynamics<'a> {
+    pub model: &'a PmorModel,
+    pub place: &'a PairPlacement,
+    pub damping: [Damping; 2],
+    /// Rigid inertia added at each bore (hub, shaft share), kg·m².
+    pub added_inertia_kgm2: [f64; 2],
+}
+
+impl PmorModel {
+    /// Modal damping of both gears (`equations::Damping`): ζ on Φ and on the shapes, each at
+    /// the coordinate's own frequency.
+    pub fn damping(&self, modal_ratio: f64, shape_ratio: f64) -> [Damping; 2] {
+        [Damping { modes_ratio: modal_ratio, shapes_ratio: shape_ratio }; 2]
+    }
+
+    /// The state at rest-in-frame (η = 0) at given angles and speeds.
+    pub fn initial_state(&self, theta: [f64; 2], omega: [f64; 2]) -> PmorState {
+        let mut s = PmorState {
+            theta,
+            omega,
+            eta: [0, 1].map(|i| vec![0.0; self.gears[i].elastic_size()]),
+            eta_dot: [0, 1].map(|i| vec![0.0; self.gears[i].elastic_size()]),
+            anchor: [0, 0],
+            input_work_j: 0.0,
+            dissipated_j: 0.0,
+        };
+        for i in 0..2 {
+            s.anchor[i] = (theta[i] / self.gears[i].pitch_rad()).floor() as i64;
+        }
+        s
+    }
+}
+
+/// Layout of the flat state y: per gear [θ, η], then per gear [θ̇, η̇], then the two work
+/// integrals.
+struct Layout {
+    n_q: [usize; 2],
+}
+
+impl Layout {
+    fn q(&self, i: usize) -> usize {
+        if i == 0 {
+            0
+        } else {
+            self.n_q[0]
+        }
+    }
+    fn v(&self, i: usize) -> usize {
+        self.n_q[0] + self.n_q[1] + self.q(i)
+    }
+    fn len(&self) -> usize {
+        2 * (self.n_q[0] + self.n_q[1]) + 2
+    }
+}
+
+impl<'a> PmorDynamics<'a> {
+    fn layout(&self) -> Layout {
+        Layout { n_q: [1 + self.model.gears[0].elastic_size(), 1 + self.model.gears[1].elastic_size()] }
+    }
+
+    fn stencil(&self, i: usize, anchor: i64, theta: f64) -> Result<Stencil, String> {
+        let g = &self.model.gears[i];
+        g.stencil(self.model.interpolation, theta - anchor as f64 * g.pitch_rad())
+    }
+
+    /// The state as a flat vector y (per gear [θ, η], then per gear [θ̇, η̇], then the work).
+    pub fn pack(&self, s: &PmorState) -> Vec<f64> {
+        let l = self.layout();
+        let mut y = vec![0.0; l.len()];
+        for i in 0..2 {
+            y[l.q(i)] = s.theta[i];
+            y[l.q(i) + 1..l.q(i) + l.n_q[i]].copy_from_slice(&s.eta[i]);
+            y[l.v(i)] = s.omega[i];
+            y[l.v(i) + 1..l.v(i) + l.n_q[i]].copy_from_slice(&s.eta_dot[i]);
+        }
+        let n = y.len();
+        y[n - 2] = s.input_work_j;
+        y[n - 1] = s.dissipated_j;
+        y
+    }
+
+    pub fn unpack(&self, y: &[f64], s: &mut PmorState) {
+        let l = self.layout();
+        for i in 0..2 {
+            s.theta[i] = y[l.q(i)];
+            s.eta[i].copy_from_slice(&y[l.q(i) + 1..l.q(i) + l.n_q[i]]);
+            s.omega[i] = y[l.v(i)];
+            s.eta_dot[i].copy_from_slice(&y[l.v(i) + 1..l.v(i) + l.n_q[i]]);
+        }
+        s.input_work_j = y[y.len() - 2];
+        s.dissipated_j = y[y.len() - 1];
+    }
+
+    /// ẏ at y (anchors fixed), and the outputs there.
+    pub fn rhs(&self, y: &[f64], anchor: [i64; 2], torques: [f64; 2]) -> Result<(Vec<f64>, PmorOutputs), String> {
+        let l = self.layout();
+        let mut stencils = Vec::with_capacity(2);
+        for i in 0..2 {
+            stencils.push(self.stencil(i, anchor[i], y[l.q(i)])?);
+        }
+        let poses = [0, 1].map(|i| GearPose {
+            theta: y[l.q(i)],
+            anchor: anchor[i],
+            stencil: stencils[i],
+            eta: &y[l.q(i) + 1..l.q(i) + l.n_q[i]],
+        });
+        let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
+        let contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage)?;
+        let mut dy = vec![0.0; y.len()];
+        let mut out = PmorOutputs::default();
+        let mut dissipation = 0.0;
+        for i in 0..2 {
+            let n = l.n_q[i];
+            dy[l.q(i)..l.q(i) + n].copy_from_slice(&y[l.v(i)..l.v(i) + n]);
+            let terms = gear_terms(
+                &self.model.gears[i],
+                &stencils[i],
+                poses[i].eta,
+                y[l.v(i)],
+                &y[l.v(i) + 1..l.v(i) + n],
+                self.damping[i],
+            );
+            let mut rhs = terms.force + DVector::from_column_slice(&contact.force[i]);
+            rhs[0] += torques[i];
+            let mut mass = terms.mass;
+            mass[(0, 0)] += self.added_inertia_kgm2[i];
+            out.kinetic_j += 0.5 * self.added_inertia_kgm2[i] * y[l.v(i)].powi(2);
+            let acc = solve_spd(mass, rhs)?;
+            dy[l.v(i)..l.v(i) + n].copy_from_slice(acc.as_slice());
+            out.kinetic_j += terms.kinetic_j;
+            out.elastic_j += terms.elastic_j;
+            dissipation += terms.dissipation_w;
+        }
+        let n = y.len();
+        dy[n - 2] = torques[0] * y[l.v(0)] + torques[1] * y[l.v(1)];
+        dy[n - 1] = dissipation;
+        out.contact_j = contact.potential_j;
+        out.contact = contact;
+        Ok((dy, out))
+    }
+
+    /// Energies and contact at a state.
+    pub fn outputs(&self, s: &PmorState) -> Result<PmorOutputs, String> {
+        Ok(self.rhs(&self.pack(s), s.anchor, [0.0; 2])?.1)
+    }
+
+    /// One RK4 step of length h with the torques held, then the anchors re-set.
+    pub fn step(&self, s: &mut PmorState, torques: [f64; 2], h: f64) -> Result<(), String> {
+        let y = self.pack(s);
+        let a = s.anchor;
+        let stage = |y: &[f64], k: &[f64], f: f64| -> Vec<f64> { y.iter().zip(k).map(|(a, b)| a + f * b).collect() };
+        let k1 = self.rhs(&y, a, torques)?.0;
+        let k2 = self.rhs(&stage(&y, &k1, 0.5 * h), a, torques)?.0;
+        let k3 = self.rhs(&stage(&y, &k2, 0.5 * h), a, torques)?.0;
+        let k4 = self.rhs(&stage(&y, &k3, h), a, torques)?.0;
+        let next: Vec<f64> =
+            (0..y.len()).map(|i| y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])).collect();
+        if next.iter().any(|v| !v.is_finite()) {
+            return Err(format!("the PMOR-Hertz state became non-finite at step {h} s: the step is too large"));
+        }
+        self.unpack(&next, s);
+        self.reanchor(s);
+        Ok(())
+    }
+
+    /// Moves each anchor to the pitch that holds its angle, carrying η_Φ through R.
+    fn reanchor(&self, s: &mut PmorState) {
+        for i in 0..2 {
+            let g = &self.model.gears[i];
+            let n_k = g.modes();
+            loop {
+                let local = s.theta[i] - s.anchor[i] as f64 * g.pitch_rad();
+                let (map, shift): (DMatrix<f64>, i64) = if local >= g.pitch_rad() {
+                    (g.pitch_map.clone(), 1)
+                } else if local < 0.0 {
+                    (g.pitch_map.transpose(), -1)
+                } else {
+                    break;
+                };
+                for v in [&mut s.eta[i], &mut s.eta_dot[i]] {
+                    let phi = DVector::from_column_slice(&v[..n_k]);
+                    v[..n_k].copy_from_slice((&map * phi).as_slice());
+                }
+                s.anchor[i] += shift;
+            }
+        }
+    }
+
+    /// Advances by `duration` in RK4 steps no longer than `max_step`.
+    pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
+        let n = (duration / max_step).ceil().max(1.0) as usize;
+        let h = duration / n as f64;
+        for _ in 0..n {
+            self.step(s, torques, h)?;
+        }
+        Ok(())
+    }
+}
+
+/// Solves M a = f for the symmetric positive definite mass matrix.
+fn solve_spd(m: DMatrix<f64>, f: DVector<f64>) -> Result<DVector<f64>, String> {
+    let chol = m.cholesky().ok_or("the reduced mass matrix is not positive definite")?;
+    Ok(chol.solve(&f))
+}

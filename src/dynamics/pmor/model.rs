@@ -1,0 +1,134 @@
+//! The reduced gear pair as plain data: what `fmu-build` computes offline and the FMU reads from
+//! its model file. Nothing here is O(n_FE): the FE fields enter only through their Gram products
+//! (the mass and stiffness invariants) and their rows at the loadable flank nodes.
+//!
+//! Per gear, in its floating frame (design §4.5): u = V(ϑ)η with V = [Φ, Ψ(ϑ)], Φ the n_k lowest
+//! fixed-bore eigenmodes (mass-normalized), Ψ(ϑ) = Σₐ wₐ(ϑ)·S_a the interpolated global contact
+//! shapes (n_t columns per angular sample, residual against Φ, mass-orthonormal per sample).
+//! ϑ is the gear's angle within its reference pitch; the samples are ϑ_s = s·Δϑ and one pitch on
+//! a shape is the one-tooth rotation of the first (S_{s+n_θ} = P·S_s), stored explicitly for
+//! s = −2 … n_θ + 2 so that every interpolation interval in [−Δϑ, pitch + Δϑ) has its four
+//! neighbours. G is the generator of rotations about the axis (per node: ẑ×), x the node
+//! positions; the products are taken with the unclamped consistent mass, so (Gx)ᵀM(Gx) is the
+//! gear's polar moment of inertia.
+
+use crate::contact::hertz::ApproachLaw;
+use crate::gear::GearPair;
+use crate::rom::flank::FlankGrid;
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// How Ψ(ϑ) is interpolated between the angular samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Interpolation {
+    /// The paper's Eqs. 15–16: C⁰, so ∂Ψ/∂ϑ jumps at every sample.
+    Linear,
+    /// Catmull–Rom (cubic Hermite with central-difference slopes over the periodic samples): C¹.
+    CatmullRom,
+}
+
+/// Products of one sample S_a with the rigid-body and eigenmode fields.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SampleInvariants {
+    /// (Gx)ᵀM(GS_a), (Gx)ᵀM S_a (n_t each).
+    pub gx_gs: DVector<f64>,
+    pub gx_s: DVector<f64>,
+    /// (GΦ)ᵀM(GS_a), (GΦ)ᵀM S_a, Φᵀ M (GS_a), Φᵀ M S_a (n_k × n_t; the last is ≈ 0 by
+    /// residualization, kept so that nothing is assumed).
+    pub gphi_gs: DMatrix<f64>,
+    pub gphi_s: DMatrix<f64>,
+    pub phi_gs: DMatrix<f64>,
+    pub phi_s: DMatrix<f64>,
+}
+
+/// Products of two samples S_a, S_b (|a − b| ≤ 3), n_t × n_t each.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PairInvariants {
+    pub gs_gs: DMatrix<f64>,
+    pub gs_s: DMatrix<f64>,
+    pub s_gs: DMatrix<f64>,
+    pub s_s: DMatrix<f64>,
+    pub k_ss: DMatrix<f64>,
+}
+
+/// One reduced gear.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PmorGear {
+    pub teeth: u32,
+    pub base_radius_m: f64,
+    /// Angular samples per pitch n_θ.
+    pub samples: usize,
+    /// Eigenvalues ω² of Φ (rad²/s²), ascending.
+    pub eigenvalues: Vec<f64>,
+    /// Shapes per sample n_t (one per torque level).
+    pub shapes: usize,
+    /// R = ΦᵀM P⁻¹Φ: the coordinates of Φ one pitch back in Φ (orthogonal when span Φ is
+    /// invariant under the tooth rotation). When ϑ passes a pitch, η_Φ ← R·η_Φ.
+    pub pitch_map: DMatrix<f64>,
+    /// max over columns of ‖P⁻¹φ − Φ R φ‖_M: how far span Φ is from invariant.
+    pub invariance_residual: f64,
+    /// (Gx)ᵀM(Gx) (kg·m²): the undeformed polar moment of inertia.
+    pub polar_inertia_kgm2: f64,
+    pub gx_gphi: DVector<f64>,
+    pub gx_phi: DVector<f64>,
+    pub gphi_gphi: DMatrix<f64>,
+    pub gphi_phi: DMatrix<f64>,
+    pub phi_phi: DMatrix<f64>,
+    /// Per stored sample (index a = s + 2, s = −2 … n_θ + 2).
+    pub sample: Vec<SampleInvariants>,
+    /// Per stored sample a and offset d = b − a + 3 ∈ 0…6 (None where b is out of range).
+    pub pair: Vec<Option<PairInvariants>>,
+    /// The loadable flank nodes of the teeth that can mesh (reference pitch).
+    pub flank: FlankGrid,
+    /// Rows of Φ at the flank nodes (3 per node: x, y, z), n_k columns.
+    pub flank_phi: DMatrix<f64>,
+    /// Rows of each stored sample S_a at the flank nodes, n_t columns.
+    pub flank_shapes: Vec<DMatrix<f64>>,
+}
+
+impl PmorGear {
+    pub fn modes(&self) -> usize {
+        self.eigenvalues.len()
+    }
+
+    /// Coordinates per gear besides the angle: n_k + n_t.
+    pub fn elastic_size(&self) -> usize {
+        self.modes() + self.shapes
+    }
+
+    pub fn pitch_rad(&self) -> f64 {
+        2.0 * std::f64::consts::PI / self.teeth as f64
+    }
+
+    pub fn sample_step_rad(&self) -> f64 {
+        self.pitch_rad() / self.samples as f64
+    }
+
+    pub fn pair_invariants(&self, a: usize, b: usize) -> &PairInvariants {
+        let d = b + 3 - a;
+        self.pair[a * 7 + d].as_ref().expect("sample pair within the interpolation stencil")
+    }
+}
+
+/// How the offline build was made (reported, and used by the online contact law).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PmorBuildInfo {
+    pub rom_torques_nm: Vec<f64>,
+    pub depth_m: f64,
+    pub law: ApproachLaw,
+    pub p_en: f64,
+    pub mesh: String,
+}
+
+/// The reduced pair: everything the FMU steps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PmorModel {
+    pub pair: GearPair,
+    pub gears: [PmorGear; 2],
+    pub interpolation: Interpolation,
+    /// Modal damping as a fraction of critical, on Φ and on the shapes (the paper's Table 9
+    /// values, 1 % and 5 %, taken at each coordinate's own frequency: `equations::Damping`).
+    pub modal_damping_ratio: f64,
+    pub shape_damping_ratio: f64,
+    pub info: PmorBuildInfo,
+}

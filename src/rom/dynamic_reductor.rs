@@ -1,0 +1,406 @@
+//! The dynamic reductor (paper Sects. 3 and 5.1, design §4.5): a pair spec and a mesh in, the
+//! reduced gear pair [`PmorModel`] out — plain data, all the FMU needs.
+//!
+//! Per gear: the lowest fixed-bore eigenmodes Φ (taken whole clusters of the cyclic spectrum, so
+//! that span Φ is invariant under a one-tooth rotation P; the residual is measured), the global
+//! contact shapes S(ϑ_s, T_j) from PMOR-Hertz statics over one mesh cycle, made residual against
+//! Φ (Eq. 14) and mass-orthonormal per sample, closed periodically (S_{s+n_θ} = P·S_s), and every
+//! Gram product that the floating-frame Lagrangian needs. Nothing O(n_FE) leaves this module.
+
+use super::flank::FlankGrid;
+use super::reductor::{pmor_hertz, Reconstructor, ReducedGear};
+use super::statics::{ContactModel, StaticModel};
+use crate::contact::hertz::ApproachLaw;
+use crate::contact::mesh_kinematics::PairPlacement;
+use crate::dynamics::pmor::model::{
+    Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
+};
+use crate::fe::assembly::{self, DofMap};
+use crate::fe::clamped_gear::ClampedGear;
+use crate::fe::eigen;
+use crate::fe::gear_mesh::{GearMesh, MeshSpec};
+use crate::fe::hex8::Formulation;
+use crate::gear::GearPair;
+use faer::sparse::linalg::matmul::sparse_dense_matmul;
+use faer::{Accum, Mat};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// The choices of the offline build.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynamicBuildOptions {
+    /// Eigenmodes per gear (raised to the end of a cluster of the cyclic spectrum).
+    pub modes: usize,
+    /// Angular samples per mesh cycle n_θ.
+    pub angles: usize,
+    /// Torque levels on gear 1 of the static analyses (N·m).
+    pub rom_torques_nm: Vec<f64>,
+    pub depth_m: f64,
+    pub p_en: f64,
+    pub law: ApproachLaw,
+    pub interpolation: Interpolation,
+    pub modal_damping_ratio: f64,
+    pub shape_damping_ratio: f64,
+}
+
+impl Default for DynamicBuildOptions {
+    fn default() -> Self {
+        DynamicBuildOptions {
+            modes: 20,
+            angles: 40,
+            rom_torques_nm: vec![150.0, 250.0],
+            depth_m: 3e-3,
+            p_en: 0.9999,
+            law: ApproachLaw::Weber,
+            interpolation: Interpolation::CatmullRom,
+            modal_damping_ratio: 0.01,
+            shape_damping_ratio: 0.05,
+        }
+    }
+}
+
+/// What the build measured, for the user and the tests.
+#[derive(Debug, Clone)]
+pub struct DynamicBuildReport {
+    /// Per gear: n_k kept, FE eigenfrequencies (Hz) of Φ.
+    pub modes_hz: [Vec<f64>; 2],
+    /// Per gear: the invariance residual of span Φ under the tooth rotation.
+    pub invariance_residual: [f64; 2],
+    /// Per gear: (Gx)ᵀM(Gx) against the exact inertia from the profile.
+    pub polar_inertia_kgm2: [(f64, f64); 2],
+    /// Per gear: ‖S(pitch) − P·S(0)‖_M / ‖S(0)‖_M from one extra static case per torque.
+    pub closure_residual: [f64; 2],
+    /// Per gear: max |ΦᵀM S| of the stored shapes (0 by construction up to round-off).
+    pub residualization: [f64; 2],
+    /// STE (m) of the static analyses, per torque, per sample.
+    pub ste_m: Vec<Vec<f64>>,
+    pub n_sv: [usize; 2],
+}
+
+/// The one-tooth rotation P of a nodal field (all nodes, 3 per node) of the structured gear
+/// mesh: (P f)(layer l, sector k) = R(−2π/z)·f(l, k + shift); `shift` = −1 gives P⁻¹ (with
+/// R(+2π/z)). Node numbering is l·z·n_sector + k·n_sector + local (`fe::gear_mesh`).
+pub fn rotate_by_teeth(gm: &GearMesh, field: &[f64], shift: i64) -> Vec<f64> {
+    let z = gm.teeth;
+    let per_sector = gm.nodes_per_sector;
+    let per_layer = z * per_sector;
+    let angle = -(shift as f64) * 2.0 * std::f64::consts::PI / z as f64;
+    let (s, c) = angle.sin_cos();
+    let mut out = vec![0.0; field.len()];
+    for node in 0..field.len() / 3 {
+        let (l, rest) = (node / per_layer, node % per_layer);
+        let (k, local) = (rest / per_sector, rest % per_sector);
+        let from = l * per_layer + ((k as i64 + shift).rem_euclid(z as i64) as usize) * per_sector + local;
+        let (fx, fy, fz) = (field[3 * from], field[3 * from + 1], field[3 * from + 2]);
+        out[3 * node] = c * fx - s * fy;
+        out[3 * node + 1] = s * fx + c * fy;
+        out[3 * node + 2] = fz;
+    }
+    out
+}
+
+/// G·f: the in-plane rotation generator ẑ× applied node by node.
+fn generator(field: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; field.len()];
+    for n in 0..field.len() / 3 {
+        out[3 * n] = -field[3 * n + 1];
+        out[3 * n + 1] = field[3 * n];
+    }
+    out
+}
+
+/// A faer matrix with the given columns.
+fn from_columns(cols: &[Vec<f64>]) -> Mat<f64> {
+    Mat::from_fn(cols[0].len(), cols.len(), |i, j| cols[j][i])
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// One gear's FE side during the build.
+struct GearFe {
+    model: ClampedGear,
+    reduced: ReducedGear,
+    reconstructor: Reconstructor,
+    /// Unclamped consistent mass (all DOFs).
+    mass_full: faer::sparse::SparseColMat<usize, f64>,
+    /// Φ expanded to all DOFs.
+    phi: Vec<Vec<f64>>,
+    eigenvalues: Vec<f64>,
+    n_sv: usize,
+}
+
+/// Builds the reduced pair. `progress(message)` reports the stages.
+pub fn build_dynamic_model(
+    pair: &GearPair,
+    mesh: &MeshSpec,
+    options: &DynamicBuildOptions,
+    progress: impl Fn(String) + Sync,
+) -> Result<(PmorModel, DynamicBuildReport), String> {
+    if options.angles < 4 {
+        return Err(format!("angles must be ≥ 4 per mesh cycle (got {})", options.angles));
+    }
+    if options.rom_torques_nm.is_empty() || options.rom_torques_nm.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err("rom_torques_nm must be one or more positive torques".into());
+    }
+    let place = PairPlacement::new(pair);
+    let mut fe = Vec::new();
+    for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+        progress(format!("gear {}: FE model", i + 1));
+        let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
+        let factor = model.factorize()?;
+        let z = gear.teeth as i64;
+        let mut teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
+        teeth.dedup();
+        let grid = FlankGrid::contact_flank(&model.mesh, i, &teeth)?;
+        progress(format!("gear {}: global attachment modes ({} flank nodes)", i + 1, grid.len()));
+        let (reduced, reconstructor, report) =
+            pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
+        progress(format!("gear {}: eigenmodes", i + 1));
+        let mass = model.mass();
+        let probe = options.modes + 6;
+        let modes = eigen::lowest_modes_factored(&model.stiffness, &mass, &factor, probe, 1e-10, 400, |_, _| {})?;
+        if modes.sturm_count != modes.ritz_values_below_shift {
+            return Err(format!("gear {}: the eigen solver missed a mode (Sturm count)", i + 1));
+        }
+        // End Φ at a gap of the spectrum: a cluster continues while the next eigenvalue is within
+        // 1e-4 (relative) of the last kept one.
+        let mut n_k = options.modes.max(1);
+        while n_k < probe && modes.eigenvalues[n_k] <= modes.eigenvalues[n_k - 1] * (1.0 + 1e-4) {
+            n_k += 1;
+        }
+        if n_k == probe {
+            return Err(format!("gear {}: no spectral gap found after {} modes", i + 1, options.modes));
+        }
+        let phi: Vec<Vec<f64>> = (0..n_k)
+            .map(|c| model.dofs.expand(&(0..model.dofs.n_free).map(|r| modes.vectors[(r, c)]).collect::<Vec<_>>()))
+            .collect();
+        let n_nodes = model.mesh.mesh.nodes.len();
+        let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
+        fe.push(GearFe {
+            model,
+            reduced,
+            reconstructor,
+            mass_full,
+            phi,
+            eigenvalues: modes.eigenvalues[..n_k].to_vec(),
+            n_sv: report.n_sv,
+        });
+    }
+
+    // Static analyses over one mesh cycle (and one more sample, one pitch on, for the closure
+    // check), for each torque.
+    progress(format!("static contact: {} angles × {} torques", options.angles, options.rom_torques_nm.len()));
+    let statics = StaticModel::new(
+        pair,
+        [&fe[0].reduced, &fe[1].reduced],
+        ContactModel::Hertz { law: options.law, depth_m: options.depth_m },
+    );
+    let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
+    let n_theta = options.angles;
+    let jobs: Vec<(usize, usize)> =
+        (0..options.rom_torques_nm.len()).flat_map(|t| (0..=n_theta).map(move |s| (t, s))).collect();
+    let cases: Vec<_> = jobs
+        .par_iter()
+        .map(|&(t, s)| statics.solve(pitch2 * s as f64 / n_theta as f64, options.rom_torques_nm[t]))
+        .collect::<Result<Vec<_>, String>>()?;
+    let case = |t: usize, s: usize| &cases[t * (n_theta + 1) + s];
+    let ste_m: Vec<Vec<f64>> =
+        (0..options.rom_torques_nm.len()).map(|t| (0..n_theta).map(|s| case(t, s).ste_m).collect()).collect();
+
+    let mut gears = Vec::new();
+    let mut report_modes = Vec::new();
+    let mut invariance = [0.0; 2];
+    let mut inertia = [(0.0, 0.0); 2];
+    let mut closure = [0.0; 2];
+    let mut residualization = [0.0; 2];
+    for (i, g) in fe.iter().enumerate() {
+        progress(format!("gear {}: shapes and invariants", i + 1));
+        let gear = if i == 0 { &pair.gear1 } else { &pair.gear2 };
+        let gm = &g.model.mesh;
+        let m_times = |f: &[f64]| assembly::mul(&g.mass_full, f);
+        let n_t = options.rom_torques_nm.len();
+        // Raw shapes per sample (0..=n_θ), per torque, as full nodal fields.
+        let raw: Vec<Vec<Vec<f64>>> = (0..=n_theta)
+            .map(|s| (0..n_t).map(|t| g.reconstructor.displacement(&case(t, s).reduced[i])).collect())
+            .collect();
+        // Residual against Φ (Eq. 14), then mass-orthonormal per sample (Gram–Schmidt, twice).
+        let m_phi: Vec<Vec<f64>> = g.phi.iter().map(|p| m_times(p)).collect();
+        let clean = |fields: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            let mut out: Vec<Vec<f64>> = Vec::new();
+            for f in fields {
+                let mut v = f.clone();
+                for _pass in 0..2 {
+                    for (p, mp) in g.phi.iter().zip(&m_phi) {
+                        let a = dot(mp, &v);
+                        v.iter_mut().zip(p).for_each(|(x, y)| *x -= a * y);
+                    }
+                    for o in &out {
+                        let a = dot(&m_times(o), &v);
+                        v.iter_mut().zip(o).for_each(|(x, y)| *x -= a * y);
+                    }
+                }
+                let norm = dot(&m_times(&v), &v).sqrt();
+                v.iter_mut().for_each(|x| *x /= norm);
+                out.push(v);
+            }
+            out
+        };
+        let base: Vec<Vec<Vec<f64>>> = raw[..n_theta].iter().map(|f| clean(f)).collect();
+        // Closure check: the sample one pitch on against P·S₀ (first torque's shape).
+        let one_on = clean(&raw[n_theta]);
+        let p_s0 = rotate_by_teeth(gm, &base[0][0], 1);
+        let diff: Vec<f64> = one_on[0].iter().zip(&p_s0).map(|(a, b)| a - b).collect();
+        closure[i] = dot(&m_times(&diff), &diff).sqrt();
+        // Stored samples s = −2 … n_θ + 2 with the periodic closure S_{s+n_θ} = P·S_s.
+        let stored: Vec<Vec<Vec<f64>>> = (-2..=n_theta as i64 + 2)
+            .map(|s| {
+                let k = s.div_euclid(n_theta as i64);
+                let r = s.rem_euclid(n_theta as i64) as usize;
+                base[r].iter().map(|f| if k == 0 { f.clone() } else { rotate_by_teeth(gm, f, k) }).collect()
+            })
+            .collect();
+
+        // Fields and their Gram products with the unclamped mass: [Gx | GΦ | Φ | GS_a | S_a].
+        let x: Vec<f64> = gm.mesh.nodes.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let n_k = g.phi.len();
+        let n_a = stored.len();
+        let mut fields: Vec<Vec<f64>> = vec![generator(&x)];
+        fields.extend(g.phi.iter().map(|p| generator(p)));
+        fields.extend(g.phi.iter().cloned());
+        for sample in &stored {
+            fields.extend(sample.iter().map(|f| generator(f)));
+        }
+        for sample in &stored {
+            fields.extend(sample.iter().cloned());
+        }
+        let f = from_columns(&fields);
+        let mut mf = Mat::zeros(f.nrows(), f.ncols());
+        sparse_dense_matmul(mf.as_mut(), Accum::Replace, g.mass_full.as_ref(), f.as_ref(), 1.0, faer::get_global_parallelism());
+        let gram = f.transpose() * &mf;
+        let gs = |a: usize, t: usize| 1 + 2 * n_k + a * n_t + t;
+        let sc = |a: usize, t: usize| 1 + 2 * n_k + n_a * n_t + a * n_t + t;
+        let gphi = |j: usize| 1 + j;
+        let phic = |j: usize| 1 + n_k + j;
+        // Stiffness products of the shapes (free DOFs; the bore does not move).
+        let dofs = &g.model.dofs;
+        let free = |v: &[f64]| -> Vec<f64> {
+            let mut out = vec![0.0; dofs.n_free];
+            for (d, slot) in dofs.free.iter().enumerate() {
+                if let Some(e) = slot {
+                    out[*e] = v[d];
+                }
+            }
+            out
+        };
+        let shape_free: Vec<Vec<f64>> = stored.iter().flat_map(|s| s.iter().map(|f| free(f))).collect();
+        let k_shapes: Vec<Vec<f64>> = shape_free.par_iter().map(|v| assembly::mul(&g.model.stiffness, v)).collect();
+
+        let sample: Vec<SampleInvariants> = (0..n_a)
+            .map(|a| SampleInvariants {
+                gx_gs: DVector::from_fn(n_t, |t, _| gram[(0, gs(a, t))]),
+                gx_s: DVector::from_fn(n_t, |t, _| gram[(0, sc(a, t))]),
+                gphi_gs: DMatrix::from_fn(n_k, n_t, |j, t| gram[(gphi(j), gs(a, t))]),
+                gphi_s: DMatrix::from_fn(n_k, n_t, |j, t| gram[(gphi(j), sc(a, t))]),
+                phi_gs: DMatrix::from_fn(n_k, n_t, |j, t| gram[(phic(j), gs(a, t))]),
+                phi_s: DMatrix::from_fn(n_k, n_t, |j, t| gram[(phic(j), sc(a, t))]),
+            })
+            .collect();
+        residualization[i] = sample.iter().map(|s| s.phi_s.amax()).fold(0.0, f64::max);
+        let mut pairs = Vec::with_capacity(n_a * 7);
+        for a in 0..n_a {
+            for d in 0..7 {
+                let b = a as i64 + d as i64 - 3;
+                if b < 0 || b >= n_a as i64 {
+                    pairs.push(None);
+                    continue;
+                }
+                let b = b as usize;
+                pairs.push(Some(PairInvariants {
+                    gs_gs: DMatrix::from_fn(n_t, n_t, |r, c| gram[(gs(a, r), gs(b, c))]),
+                    gs_s: DMatrix::from_fn(n_t, n_t, |r, c| gram[(gs(a, r), sc(b, c))]),
+                    s_gs: DMatrix::from_fn(n_t, n_t, |r, c| gram[(sc(a, r), gs(b, c))]),
+                    s_s: DMatrix::from_fn(n_t, n_t, |r, c| gram[(sc(a, r), sc(b, c))]),
+                    k_ss: DMatrix::from_fn(n_t, n_t, |r, c| {
+                        0.5 * (dot(&shape_free[a * n_t + r], &k_shapes[b * n_t + c])
+                            + dot(&shape_free[b * n_t + c], &k_shapes[a * n_t + r]))
+                    }),
+                }));
+            }
+        }
+        // The tooth rotation on Φ: R = ΦᵀM P⁻¹Φ and the part of P⁻¹Φ outside span Φ.
+        let back: Vec<Vec<f64>> = g.phi.iter().map(|p| rotate_by_teeth(gm, p, -1)).collect();
+        let pitch_map = DMatrix::from_fn(n_k, n_k, |r, c| dot(&m_phi[r], &back[c]));
+        invariance[i] = (0..n_k)
+            .map(|c| {
+                let mut v = back[c].clone();
+                for (r, p) in g.phi.iter().enumerate() {
+                    v.iter_mut().zip(p).for_each(|(x, y)| *x -= pitch_map[(r, c)] * y);
+                }
+                dot(&m_times(&v), &v).sqrt()
+            })
+            .fold(0.0, f64::max);
+        // Flank rows for the online contact: the teeth that can mesh, with a margin of two pairs
+        // on each side (an anchor may lag its angle by a step near a pitch boundary).
+        let z = gear.teeth as i64;
+        let reach = place.pairs_in_reach();
+        let mut teeth: Vec<usize> =
+            (*reach.start() - 2..=*reach.end() + 2).map(|j| j.rem_euclid(z) as usize).collect();
+        teeth.sort();
+        teeth.dedup();
+        let flank = FlankGrid::contact_flank(gm, i, &teeth)?;
+        let rows = |field: &[f64], row: usize| field[3 * flank.nodes[row / 3].0 + row % 3];
+        let flank_phi = DMatrix::from_fn(3 * flank.len(), n_k, |r, c| rows(&g.phi[c], r));
+        let flank_shapes: Vec<DMatrix<f64>> =
+            stored.iter().map(|s| DMatrix::from_fn(3 * flank.len(), n_t, |r, c| rows(&s[c], r))).collect();
+
+        inertia[i] = (gram[(0, 0)], gear.inertia_kgm2);
+        report_modes.push(g.eigenvalues.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect::<Vec<_>>());
+        gears.push(PmorGear {
+            teeth: gear.teeth,
+            base_radius_m: gear.base_radius_m,
+            samples: n_theta,
+            eigenvalues: g.eigenvalues.clone(),
+            shapes: n_t,
+            pitch_map,
+            invariance_residual: invariance[i],
+            polar_inertia_kgm2: gram[(0, 0)],
+            gx_gphi: DVector::from_fn(n_k, |j, _| gram[(0, gphi(j))]),
+            gx_phi: DVector::from_fn(n_k, |j, _| gram[(0, phic(j))]),
+            gphi_gphi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(gphi(r), gphi(c))]),
+            gphi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(gphi(r), phic(c))]),
+            phi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(phic(r), phic(c))]),
+            sample,
+            pair: pairs,
+            flank,
+            flank_phi,
+            flank_shapes,
+        });
+    }
+    let gears: [PmorGear; 2] = gears.try_into().map_err(|_| "two gears")?;
+    let model = PmorModel {
+        pair: pair.clone(),
+        gears,
+        interpolation: options.interpolation,
+        modal_damping_ratio: options.modal_damping_ratio,
+        shape_damping_ratio: options.shape_damping_ratio,
+        info: PmorBuildInfo {
+            rom_torques_nm: options.rom_torques_nm.clone(),
+            depth_m: options.depth_m,
+            law: options.law,
+            p_en: options.p_en,
+            mesh: format!("{mesh:?}"),
+        },
+    };
+    let report = DynamicBuildReport {
+        modes_hz: report_modes.try_into().map_err(|_| "two gears")?,
+        invariance_residual: invariance,
+        polar_inertia_kgm2: inertia,
+        closure_residual: closure,
+        residualization,
+        ste_m,
+        n_sv: [fe[0].n_sv, fe[1].n_sv],
+    };
+    Ok((model, report))
+}
