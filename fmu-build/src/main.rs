@@ -50,8 +50,10 @@ struct RomOptions {
     /// Angular samples of the global contact shapes per mesh cycle n_θ.
     #[arg(long, default_value_t = 40)]
     angles: usize,
-    /// Torque levels on gear 1 of the static analyses (N·m), comma-separated: n_t shapes per sample.
-    #[arg(long, value_delimiter = ',', default_value = "150,250")]
+    /// Torque levels on gear 1 of the static analyses (N·m), comma-separated: n_t shapes per
+    /// sample. One level by default: PMOR-Hertz's global shapes are nearly proportional to the
+    /// load, and levels whose shapes coincide are refused (a singular mass matrix).
+    #[arg(long, value_delimiter = ',', default_value = "250")]
     rom_torques_nm: Vec<f64>,
     /// Depth h (mm) of the partial models and of the Hertz approach.
     #[arg(long, default_value_t = 3.0)]

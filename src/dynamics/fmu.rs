@@ -178,12 +178,12 @@ impl GearPairFmu {
     /// shape damping ratio from mesh_damping_ratio.
     pub fn pmor<'a>(&'a self, model: &'a PmorModel, place: &'a PairPlacement, s: &GearPairState) -> PmorDynamics<'a> {
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
-        PmorDynamics {
+        PmorDynamics::new(
             model,
             place,
-            damping: model.damping(model.modal_damping_ratio, s.params.mesh_damping_ratio),
-            added_inertia_kgm2: [s.params.inertia_1_kgm2 - fe[0], s.params.inertia_2_kgm2 - fe[1]],
-        }
+            model.damping(model.modal_damping_ratio, s.params.mesh_damping_ratio),
+            [s.params.inertia_1_kgm2 - fe[0], s.params.inertia_2_kgm2 - fe[1]],
+        )
     }
 
     fn pmor_outputs(&self, s: &GearPairState) -> Result<Option<(PmorOutputs, PmorState)>, String> {

@@ -48,7 +48,7 @@ impl Default for DynamicBuildOptions {
         DynamicBuildOptions {
             modes: 20,
             angles: 40,
-            rom_torques_nm: vec![150.0, 250.0],
+            rom_torques_nm: vec![250.0],
             depth_m: 3e-3,
             p_en: 0.9999,
             law: ApproachLaw::Weber,
@@ -225,29 +225,50 @@ pub fn build_dynamic_model(
         let raw: Vec<Vec<Vec<f64>>> = (0..=n_theta)
             .map(|s| (0..n_t).map(|t| g.reconstructor.displacement(&case(t, s).reduced[i])).collect())
             .collect();
-        // Residual against Φ (Eq. 14), then mass-orthonormal per sample (Gram–Schmidt, twice).
+        // Residual against Φ (Eq. 14), then each scaled to unit modal mass. The torque levels of
+        // one sample are NOT orthogonalized against each other: their difference is a small,
+        // ill-determined direction whose sign and orientation jump between samples, and an
+        // interpolated pair of such columns can cancel (a singular mass matrix mid-interval —
+        // seen as a spurious impulse before this was changed). Nearly parallel columns are only
+        // ill-conditioned, and their coupled frequency is the physical Rayleigh quotient.
         let m_phi: Vec<Vec<f64>> = g.phi.iter().map(|p| m_times(p)).collect();
         let clean = |fields: &[Vec<f64>]| -> Vec<Vec<f64>> {
-            let mut out: Vec<Vec<f64>> = Vec::new();
-            for f in fields {
-                let mut v = f.clone();
-                for _pass in 0..2 {
-                    for (p, mp) in g.phi.iter().zip(&m_phi) {
-                        let a = dot(mp, &v);
-                        v.iter_mut().zip(p).for_each(|(x, y)| *x -= a * y);
+            fields
+                .iter()
+                .map(|f| {
+                    let mut v = f.clone();
+                    for _pass in 0..2 {
+                        for (p, mp) in g.phi.iter().zip(&m_phi) {
+                            let a = dot(mp, &v);
+                            v.iter_mut().zip(p).for_each(|(x, y)| *x -= a * y);
+                        }
                     }
-                    for o in &out {
-                        let a = dot(&m_times(o), &v);
-                        v.iter_mut().zip(o).for_each(|(x, y)| *x -= a * y);
-                    }
-                }
-                let norm = dot(&m_times(&v), &v).sqrt();
-                v.iter_mut().for_each(|x| *x /= norm);
-                out.push(v);
-            }
-            out
+                    let norm = dot(&m_times(&v), &v).sqrt();
+                    v.iter_mut().for_each(|x| *x /= norm);
+                    v
+                })
+                .collect()
         };
         let base: Vec<Vec<Vec<f64>>> = raw[..n_theta].iter().map(|f| clean(f)).collect();
+        // Several torque levels must give shapes that differ: the global contact shapes of
+        // PMOR-Hertz are nearly proportional to the load (the nonlinear local part is the analytic
+        // Hertz law), so two levels are often the same direction to 1e-10, which makes the mass
+        // matrix singular. Refuse that instead of integrating noise.
+        if n_t > 1 {
+            for (s_idx, sample) in base.iter().enumerate() {
+                let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_times(&sample[r]), &sample[c]));
+                let eig = nalgebra::SymmetricEigen::new(gram).eigenvalues;
+                let (lo, hi) = (eig.min(), eig.max());
+                if lo < 1e-6 * hi {
+                    return Err(format!(
+                        "gear {}: the global contact shapes of the torque levels {:?} N·m coincide at angle sample {s_idx} (Gram eigenvalue ratio {:.1e} < 1e-6): they add no direction; use one torque level (--rom-torques-nm)",
+                        i + 1,
+                        options.rom_torques_nm,
+                        lo / hi
+                    ));
+                }
+            }
+        }
         // Closure check: the sample one pitch on against P·S₀ (first torque's shape).
         let one_on = clean(&raw[n_theta]);
         let p_s0 = rotate_by_teeth(gm, &base[0][0], 1);

@@ -106,12 +106,23 @@ pub fn candidate_pairs(model: &PmorModel, theta2: f64) -> std::ops::RangeInclusi
     lo..=hi
 }
 
+/// Where the contact force enters the elastic coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Loading {
+    /// The Hertz pressure band integrated over the flank (the statics' loads; the default).
+    HertzBand,
+    /// A point load at the contact point: exactly the gradient of the penetration, so the contact
+    /// force derives from the potential W(α) — the energy test's control case.
+    Point,
+}
+
 /// Contact loads of the pair; `restage` maps a gear's angle to its stencil (for the differences).
 pub fn contact_loads(
     model: &PmorModel,
     place: &PairPlacement,
     poses: [&GearPose; 2],
     restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
+    loading: Loading,
 ) -> Result<ContactLoads, String> {
     let p = &model.pair;
     let te = p.gear1.base_radius_m * poses[0].theta - p.gear2.base_radius_m * poses[1].theta;
@@ -151,11 +162,22 @@ pub fn contact_loads(
             let beta = law.half_width(force);
             for i in 0..2 {
                 let g = &model.gears[i];
-                let band = merged(
-                    g.flank.band_shares(refs[i], c.radius_m[i], beta, base[i], s).ok_or("band outside the stored flank")?,
-                );
+                let (band, normal) = match loading {
+                    Loading::HertzBand => (
+                        merged(
+                            g.flank
+                                .band_shares(refs[i], c.radius_m[i], beta, base[i], s)
+                                .ok_or("band outside the stored flank")?,
+                        ),
+                        None,
+                    ),
+                    Loading::Point => {
+                        let (shares, n, _) = reference_point(model, i, poses[i], &c)?;
+                        (shares, Some(n))
+                    }
+                };
                 for &(k, w) in &band {
-                    g.basis_row(&poses[i].stencil, k, g.flank.nodes[k].1, &mut tmp[i]);
+                    g.basis_row(&poses[i].stencil, k, normal.unwrap_or(g.flank.nodes[k].1), &mut tmp[i]);
                     for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
                         *f -= force * w * t;
                     }

@@ -106,18 +106,14 @@ pub struct Damping {
     pub shapes_ratio: f64,
 }
 
-/// M(q), Q_v, ∂U/∂q and damping of one gear. `eta`, `eta_dot`: n_k + n_t; `omega` = θ̇.
-pub fn gear_terms(gear: &PmorGear, st: &Stencil, eta: &[f64], omega: f64, eta_dot: &[f64], damping: Damping) -> GearTerms {
+/// N = BᵀMB of the interval whose stencil starts at stored sample `a0`: the Gram matrix of
+/// [Gx | GΦ | Φ | GS_a | S_a], assembled from the stored invariants ((1 + 2n_k + 8n_t)²).
+pub fn interval_gram(gear: &PmorGear, a0: usize) -> DMatrix<f64> {
     let (n_k, n_t) = (gear.modes(), gear.shapes);
-    let n_q = 1 + n_k + n_t;
     let n_b = 1 + 2 * n_k + 8 * n_t;
     let (gphi, phi) = (1, 1 + n_k);
     let gs = |a: usize| 1 + 2 * n_k + a * n_t;
     let sc = |a: usize| 1 + 2 * n_k + 4 * n_t + a * n_t;
-    let (w, dw, ddw) = (st.weights.w, st.weights.dw, st.weights.ddw);
-    let d = st.step;
-
-    // N = BᵀMB on this interval, written symmetrically.
     let mut nm = DMatrix::<f64>::zeros(n_b, n_b);
     let mut set = |i: usize, j: usize, v: f64| {
         nm[(i, j)] = v;
@@ -134,7 +130,7 @@ pub fn gear_terms(gear: &PmorGear, st: &Stencil, eta: &[f64], omega: f64, eta_do
         }
     }
     for a in 0..4 {
-        let s = &gear.sample[st.a0 + a];
+        let s = &gear.sample[a0 + a];
         for t in 0..n_t {
             set(0, gs(a) + t, s.gx_gs[t]);
             set(0, sc(a) + t, s.gx_s[t]);
@@ -146,7 +142,7 @@ pub fn gear_terms(gear: &PmorGear, st: &Stencil, eta: &[f64], omega: f64, eta_do
             }
         }
         for b in a..4 {
-            let p = gear.pair_invariants(st.a0 + a, st.a0 + b);
+            let p = gear.pair_invariants(a0 + a, a0 + b);
             for r in 0..n_t {
                 for c in 0..n_t {
                     set(gs(a) + r, gs(b) + c, p.gs_gs[(r, c)]);
@@ -157,6 +153,30 @@ pub fn gear_terms(gear: &PmorGear, st: &Stencil, eta: &[f64], omega: f64, eta_do
             }
         }
     }
+
+    nm
+}
+
+/// M(q), Q_v, ∂U/∂q and damping of one gear. `eta`, `eta_dot`: n_k + n_t; `omega` = θ̇.
+/// `nm` is [`interval_gram`] of the stencil's interval (callers cache it: it changes only when ϑ
+/// crosses a sample).
+pub fn gear_terms(
+    gear: &PmorGear,
+    st: &Stencil,
+    nm: &DMatrix<f64>,
+    eta: &[f64],
+    omega: f64,
+    eta_dot: &[f64],
+    damping: Damping,
+) -> GearTerms {
+    let (n_k, n_t) = (gear.modes(), gear.shapes);
+    let n_q = 1 + n_k + n_t;
+    let n_b = 1 + 2 * n_k + 8 * n_t;
+    let (gphi, phi) = (1, 1 + n_k);
+    let gs = |a: usize| 1 + 2 * n_k + a * n_t;
+    let sc = |a: usize| 1 + 2 * n_k + 4 * n_t + a * n_t;
+    let (w, dw, ddw) = (st.weights.w, st.weights.dw, st.weights.ddw);
+    let d = st.step;
 
     let (eta_phi, eta_psi) = eta.split_at(n_k);
     let (etad_phi, etad_psi) = eta_dot.split_at(n_k);
@@ -197,13 +217,13 @@ pub fn gear_terms(gear: &PmorGear, st: &Stencil, eta: &[f64], omega: f64, eta_do
     qd[0] = omega;
     qd.rows_mut(1, n_k + n_t).copy_from_slice(eta_dot);
     let c = apply_c(&qd);
-    let y = &nm * &c;
+    let y = nm * &c;
     let kinetic = 0.5 * c.dot(&y);
     // M = CᵀNC column by column: N·C·e_j is a product only for the θ column.
     let mut mass = DMatrix::<f64>::zeros(n_q, n_q);
     let mut e = DVector::<f64>::zeros(n_q);
     e[0] = 1.0;
-    let col = apply_ct(&(&nm * apply_c(&e)));
+    let col = apply_ct(&(nm * apply_c(&e)));
     mass.set_column(0, &col);
     for j in 0..n_k {
         let col = apply_ct(&nm.column(phi + j).into_owned());
@@ -252,7 +272,7 @@ pub fn gear_terms(gear: &PmorGear, st: &Stencil, eta: &[f64], omega: f64, eta_do
             cdq[sc(a) + m] = omega * omega * ddw[a] / (d * d) * eta_psi[m] + 2.0 * omega * dw[a] / d * etad_psi[m];
         }
     }
-    force -= apply_ct(&(&nm * cdq));
+    force -= apply_ct(&(nm * cdq));
 
     // Elastic: Λ on Φ, K_Ψ(ϑ) = Σ wₐw_b K_ab on the shapes, and its ϑ-derivative.
     let mut k_psi = DMatrix::<f64>::zeros(n_t, n_t);

@@ -20,11 +20,13 @@ pub mod interpolation;
 pub mod model;
 
 use crate::contact::mesh_kinematics::PairPlacement;
-use contact::{contact_loads, ContactLoads, GearPose};
+use contact::{contact_loads, ContactLoads, GearPose, Loading};
 use equations::{gear_terms, Damping, Stencil};
 use model::PmorModel;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+use std::cell::RefCell;
+use std::rc::Rc;
 
 /// The state of the reduced pair (plain data: an FMU state is a copy of it).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -62,6 +64,10 @@ pub struct PmorDynamics<'a> {
     pub damping: [Damping; 2],
     /// Rigid inertia added at each bore (hub, shaft share), kg·m².
     pub added_inertia_kgm2: [f64; 2],
+    /// How the contact force enters the elastic coordinates (the Hertz band by default).
+    pub loading: Loading,
+    /// The Gram matrix N of the interval last used, per gear (it changes only at samples).
+    gram_cache: [RefCell<Option<(usize, Rc<DMatrix<f64>>)>>; 2],
 }
 
 impl PmorModel {
@@ -112,6 +118,23 @@ impl Layout {
 }
 
 impl<'a> PmorDynamics<'a> {
+    pub fn new(model: &'a PmorModel, place: &'a PairPlacement, damping: [Damping; 2], added_inertia_kgm2: [f64; 2]) -> Self {
+        PmorDynamics { model, place, damping, added_inertia_kgm2, loading: Loading::HertzBand, gram_cache: Default::default() }
+    }
+
+    /// N of gear i's interval starting at stored sample a0 (cached).
+    fn gram(&self, i: usize, a0: usize) -> Rc<DMatrix<f64>> {
+        let mut cache = self.gram_cache[i].borrow_mut();
+        match &*cache {
+            Some((a, n)) if *a == a0 => n.clone(),
+            _ => {
+                let n = Rc::new(equations::interval_gram(&self.model.gears[i], a0));
+                *cache = Some((a0, n.clone()));
+                n
+            }
+        }
+    }
+
     fn layout(&self) -> Layout {
         Layout { n_q: [1 + self.model.gears[0].elastic_size(), 1 + self.model.gears[1].elastic_size()] }
     }
@@ -163,7 +186,7 @@ impl<'a> PmorDynamics<'a> {
             eta: &y[l.q(i) + 1..l.q(i) + l.n_q[i]],
         });
         let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
-        let contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage)?;
+        let contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage, self.loading)?;
         let mut dy = vec![0.0; y.len()];
         let mut out = PmorOutputs::default();
         let mut dissipation = 0.0;
@@ -173,6 +196,7 @@ impl<'a> PmorDynamics<'a> {
             let terms = gear_terms(
                 &self.model.gears[i],
                 &stencils[i],
+                &self.gram(i, stencils[i].a0),
                 poses[i].eta,
                 y[l.v(i)],
                 &y[l.v(i) + 1..l.v(i) + n],

@@ -4,7 +4,8 @@
 //!
 //! Per gear, in its floating frame (design §4.5): u = V(ϑ)η with V = [Φ, Ψ(ϑ)], Φ the n_k lowest
 //! fixed-bore eigenmodes (mass-normalized), Ψ(ϑ) = Σₐ wₐ(ϑ)·S_a the interpolated global contact
-//! shapes (n_t columns per angular sample, residual against Φ, mass-orthonormal per sample).
+//! shapes (n_t columns per angular sample, one per torque level, residual against Φ and of unit
+//! modal mass each).
 //! ϑ is the gear's angle within its reference pitch; the samples are ϑ_s = s·Δϑ and one pitch on
 //! a shape is the one-tooth rotation of the first (S_{s+n_θ} = P·S_s), stored explicitly for
 //! s = −2 … n_θ + 2 so that every interpolation interval in [−Δϑ, pitch + Δϑ) has its four
