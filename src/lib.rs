@@ -1,7 +1,8 @@
 //! gearfmu: FE-grade gear-pair dynamics as an FMI 2.0 Co-Simulation FMU.
 //!
-//! Offline (fmu-build): `gear` (spec, geometry) → `dynamics` (mesh stiffness, models) →
-//! `model_file` (the only thing that crosses). Online (the FMU): `fmi2`, the generic FMI layer,
+//! Offline (fmu-build): `gear` (spec, geometry) → `fe` (FE model per gear) → `rom` (reduction,
+//! statics, the dynamic reductor) or `dynamics` (lumped mesh stiffness) → `model_file` (the only
+//! thing that crosses). Online (the FMU): `fmi2`, the generic FMI layer,
 //! drives `dynamics::fmu` through the model file. See `../shared/design.md`.
 
 pub mod contact;

@@ -3,6 +3,7 @@
 //! example 3, the PMOR-Hertz statics it must reproduce in the slow limit, and conservation of
 //! energy. One reduced pair (default spur mesh, default build options) serves every test.
 
+#[allow(dead_code)]
 mod common;
 
 use gearfmu::contact::hertz::ApproachLaw;
@@ -127,7 +128,7 @@ fn slow_run_reproduces_the_static_transmission_error() {
     let w2 = 5.0;
     let theta2_start = -0.2 * pitch2;
     let mut s = m.initial_state([(rb[1] * theta2_start + mean_static) / rb[0], theta2_start], [w2 * rb[1] / rb[0], w2]);
-    let h = 1e-6;
+    let h = gearfmu::dynamics::fmu::PMOR_DEFAULT_MAX_STEP_S;
     let brake = |s: &PmorState| -torque * rb[1] / rb[0] - 20.0 * (s.omega[1] - w2);
     // (θ₂, DTE) along the run; then the DTE at the statics' own angles, so that both curves are
     // sampled alike (a table interpolated between samples would cut the peaks).
@@ -168,7 +169,7 @@ fn example_3_reaches_the_closed_form_speed_and_the_static_mean() {
     let m = &f.model;
     let dynamics = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
     let mut s = m.initial_state([0.0, 0.0], [0.0, 0.0]);
-    let (h, t_end) = (1e-6, 25e-3);
+    let (h, t_end) = (gearfmu::dynamics::fmu::PMOR_DEFAULT_MAX_STEP_S, 25e-3);
     let steps = (t_end / h) as usize;
     let mut record = Vec::with_capacity(steps);
     let started = std::time::Instant::now();
@@ -246,4 +247,18 @@ fn undamped_pair_conserves_energy_over_ten_mesh_cycles() {
     assert!(drift < 1e-4 * e0.abs() && drift < 1e-3 * vib);
     assert!(drift_band < 1e-4 * e0.abs() && drift_band < 3e-2 * vib_band);
     assert!(drift < drift_band / 10.0, "the band is the named term: point loads must remove most of the drift");
+}
+
+/// Regression guard: an angle a hair below a pitch boundary (ϑ rounds to the pitch itself) used
+/// to make the pitch anchor oscillate forever; the fmpy drivetrain demo hung on it at t = 0.
+#[test]
+fn a_start_on_a_pitch_boundary_steps() {
+    let f = fixture();
+    let m = &f.model;
+    let dynamics = PmorDynamics::new(m, &f.place, m.damping(0.01, 0.05), [0.0; 2]);
+    for theta in [-1e-20, -0.0, 1e-300, -1e-300] {
+        let mut s = m.initial_state([theta, theta], [0.0, 0.0]);
+        dynamics.step(&mut s, [0.0, -0.0], 2e-6).unwrap();
+        assert_eq!(s.anchor, [(s.theta[0] / m.gears[0].pitch_rad()).floor() as i64, (s.theta[1] / m.gears[1].pitch_rad()).floor() as i64]);
+    }
 }

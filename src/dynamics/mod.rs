@@ -1,5 +1,5 @@
-//! Gear-pair dynamics: the fidelity levels (today the lumped model; the FE-based PMOR-Hertz
-//! model joins as another `model_file::ModelKind`) and the FMU glue (`fmu`) that drives them.
+//! Gear-pair dynamics: the fidelity levels (the lumped model, and the FE-based PMOR-Hertz reduced
+//! pair in `pmor`), each a `model_file::ModelKind`, and the FMU glue (`fmu`) that drives them.
 
 pub mod fmu;
 pub mod iso6336;

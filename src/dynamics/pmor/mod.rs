@@ -245,25 +245,22 @@ impl<'a> PmorDynamics<'a> {
         Ok(())
     }
 
-    /// Moves each anchor to the pitch that holds its angle, carrying η_Φ through R.
+    /// Moves each anchor to the pitch that holds its angle, carrying η_Φ through R (forward) or
+    /// Rᵀ (back). The target is computed once, so round-off at a pitch boundary (θ = −1e−20
+    /// gives ϑ = pitch exactly) cannot make it oscillate; the stored samples reach past both ends.
     fn reanchor(&self, s: &mut PmorState) {
         for i in 0..2 {
             let g = &self.model.gears[i];
             let n_k = g.modes();
-            loop {
-                let local = s.theta[i] - s.anchor[i] as f64 * g.pitch_rad();
-                let (map, shift): (DMatrix<f64>, i64) = if local >= g.pitch_rad() {
-                    (g.pitch_map.clone(), 1)
-                } else if local < 0.0 {
-                    (g.pitch_map.transpose(), -1)
-                } else {
-                    break;
-                };
+            let target = (s.theta[i] / g.pitch_rad()).floor() as i64;
+            while s.anchor[i] != target {
+                let forward = s.anchor[i] < target;
+                let map: DMatrix<f64> = if forward { g.pitch_map.clone() } else { g.pitch_map.transpose() };
                 for v in [&mut s.eta[i], &mut s.eta_dot[i]] {
                     let phi = DVector::from_column_slice(&v[..n_k]);
                     v[..n_k].copy_from_slice((&map * phi).as_slice());
                 }
-                s.anchor[i] += shift;
+                s.anchor[i] += if forward { 1 } else { -1 };
             }
         }
     }
