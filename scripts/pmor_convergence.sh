@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Convergence of the PMOR-Hertz FMU on example 3 (BENCHMARKS.md): DTE mean and peak-to-peak over
+# the last mesh cycle and ω₂ at 25 ms, against the eigenmodes kept (n_k), the angular samples
+# (n_θ), the mesh and the internal step; each row is one build + one fmpy run of scripts/example3.py.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-out/convergence}
+mkdir -p "$out"
+spec=examples/kurokawa_spur.toml
+row() {  # name, build options…, then "--" and example3 options
+  local name=$1; shift
+  local build=() run=()
+  while [ $# -gt 0 ] && [ "$1" != "--" ]; do build+=("$1"); shift; done
+  [ $# -gt 0 ] && shift
+  run=("$@")
+  local start=$(date +%s.%N)
+  ./target/release/fmu-build build "$spec" -o "$out/$name.fmu" "${build[@]}" > "$out/$name.build.txt"
+  local built=$(date +%s.%N)
+  local line
+  line=$(.venv/bin/python scripts/example3.py "$out/$name.fmu" "${run[@]}" | grep "^| $name.fmu")
+  printf '| %s | %.1f %s\n' "$name" "$(echo "$built - $start" | bc)" "${line#| $name.fmu }"
+}
+echo "| setting | offline build (s) | wall (s) | real-time factor | µs per doStep | memory (MiB) | ω₂ end (rad/s) | DTE mean (µm) | DTE p-p (µm) |"
+echo "|---|---|---|---|---|---|---|---|---|"
+row default
+row modes10 --modes 10
+row modes40 --modes 40
+row angles20 --angles 20
+row angles80 --angles 80
+row linear --interpolation linear
+row torque185 --rom-torques-nm 185
+row fine_mesh --across 6 --profile 12 --rim 6
+row step05us -- --max-step 5e-7
+row step5us -- --max-step 5e-6
