@@ -150,10 +150,7 @@ pub fn build_dynamic_model(
         progress(format!("gear {}: FE model", i + 1));
         let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
         let factor = model.factorize()?;
-        let z = gear.teeth as i64;
-        let mut teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
-        teeth.dedup();
-        let grid = FlankGrid::contact_flank(&model.mesh, i, &teeth)?;
+        let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, &place, 0)?;
         progress(format!("gear {}: global attachment modes ({} flank nodes)", i + 1, grid.len()));
         let (reduced, reconstructor, report) =
             pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
@@ -364,13 +361,7 @@ pub fn build_dynamic_model(
             .fold(0.0, f64::max);
         // Flank rows for the online contact: the teeth that can mesh, with a margin of two pairs
         // on each side (an anchor may lag its angle by a step near a pitch boundary).
-        let z = gear.teeth as i64;
-        let reach = place.pairs_in_reach();
-        let mut teeth: Vec<usize> =
-            (*reach.start() - 2..=*reach.end() + 2).map(|j| j.rem_euclid(z) as usize).collect();
-        teeth.sort();
-        teeth.dedup();
-        let flank = FlankGrid::contact_flank(gm, i, &teeth)?;
+        let flank = FlankGrid::contact_flank_in_reach(gm, i, &place, 2)?;
         let rows = |field: &[f64], row: usize| field[3 * flank.nodes[row / 3].0 + row % 3];
         let flank_phi = DMatrix::from_fn(3 * flank.len(), n_k, |r, c| rows(&g.phi[c], r));
         let flank_shapes: Vec<DMatrix<f64>> =

@@ -39,6 +39,26 @@ impl FlankGrid {
         }
     }
 
+    /// The contact flank of gear `gear` on the teeth of the tooth pairs that can touch in one
+    /// pitch (`PairPlacement::pairs_in_reach`), plus `margin` pairs on each side.
+    pub fn contact_flank_in_reach(
+        gm: &GearMesh,
+        gear: usize,
+        place: &crate::contact::mesh_kinematics::PairPlacement,
+        margin: i64,
+    ) -> Result<Self, String> {
+        let z = gm.teeth as i64;
+        let reach = place.pairs_in_reach();
+        let mut teeth: Vec<usize> = Vec::new();
+        for j in *reach.start() - margin..=*reach.end() + margin {
+            let t = j.rem_euclid(z) as usize;
+            if !teeth.contains(&t) {
+                teeth.push(t);
+            }
+        }
+        Self::contact_flank(gm, gear, &teeth)
+    }
+
     /// The flank nodes of `side` (+1 / −1) on `teeth`; `turned_over`: world z = −own z.
     fn new(gm: &GearMesh, side: i8, teeth: &[usize], turned_over: bool) -> Result<Self, String> {
         let radius = |n: usize| gm.mesh.nodes[n][0].hypot(gm.mesh.nodes[n][1]);

@@ -45,10 +45,7 @@ impl ReducedPair {
         for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
             let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
             let factor = model.factorize()?;
-            let z = gear.teeth as i64;
-            let mut teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
-            teeth.dedup();
-            let grid = FlankGrid::contact_flank(&model.mesh, i, &teeth)?;
+            let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, &place, 0)?;
             match method {
                 Method::PmorHertz { depth_m, p_en, .. } => {
                     let (reduced, _, report) = pmor_hertz(&model, &factor, grid, depth_m, p_en, |n| progress(i, n))?;
