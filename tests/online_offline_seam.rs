@@ -37,8 +37,7 @@ fn the_online_path_uses_no_offline_code() {
             "dynamic_reductor",
             "attachment",
             "statics::",
-        ]
-        {
+        ] {
             assert!(!text.contains(forbidden), "{file} refers to offline code ({forbidden})");
         }
     }

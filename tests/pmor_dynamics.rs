@@ -87,23 +87,35 @@ fn reduced_gears_match_the_fe_model_and_close_periodically() {
         // Independent eigen solve (probe of n_k + 2 instead of n_k + 6 vectors).
         let gear = if i == 0 { &pair.gear1 } else { &pair.gear2 };
         let fe = ClampedGear::new(&pair, gear, &MeshSpec::default(), Formulation::IncompatibleModes);
-        let modes =
-            eigen::lowest_modes(&fe.stiffness, &fe.mass(), g.modes() + 2, 1e-12, 400, |_, _| {}).unwrap();
+        let modes = eigen::lowest_modes(&fe.stiffness, &fe.mass(), g.modes() + 2, 1e-12, 400, |_, _| {}).unwrap();
         for (j, lam) in g.eigenvalues.iter().enumerate() {
             assert!(((lam - modes.eigenvalues[j]) / lam).abs() < 1e-6, "gear {i} mode {j}");
         }
         // Φ's frequencies in the reduced model: the Φ block of (VᵀKV, VᵀMV) at a frozen angle.
         let st = g.stencil(f.model.interpolation, 0.37 * g.pitch_rad()).unwrap();
         let n_e = g.elastic_size();
-        let terms = gear_terms(g, &st, &interval_gram(g, st.a0), &vec![0.0; n_e], 0.0, &vec![0.0; n_e], Damping { modes_ratio: 0.0, shapes_ratio: 0.0 });
+        let terms = gear_terms(
+            g,
+            &st,
+            &interval_gram(g, st.a0),
+            &vec![0.0; n_e],
+            0.0,
+            &vec![0.0; n_e],
+            Damping { modes_ratio: 0.0, shapes_ratio: 0.0 },
+        );
         let m_phi = terms.mass.view((1, 1), (g.modes(), g.modes())).into_owned();
         let k_phi = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&g.eigenvalues));
         let l = m_phi.cholesky().unwrap().l();
         let li = l.try_inverse().unwrap();
-        let mut reduced: Vec<f64> = nalgebra::SymmetricEigen::new(&li * k_phi * li.transpose()).eigenvalues.iter().copied().collect();
+        let mut reduced: Vec<f64> =
+            nalgebra::SymmetricEigen::new(&li * k_phi * li.transpose()).eigenvalues.iter().copied().collect();
         reduced.sort_by(f64::total_cmp);
         for (j, lam) in reduced.iter().enumerate() {
-            assert!(((lam - modes.eigenvalues[j]) / lam).abs() < 1e-6, "gear {i}: reduced mode {j} {lam} vs FE {}", modes.eigenvalues[j]);
+            assert!(
+                ((lam - modes.eigenvalues[j]) / lam).abs() < 1e-6,
+                "gear {i}: reduced mode {j} {lam} vs FE {}",
+                modes.eigenvalues[j]
+            );
         }
     }
 }
@@ -153,8 +165,15 @@ fn slow_run_reproduces_the_static_transmission_error() {
     let p2p = |v: &[f64]| v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min);
     let (md, ms) = (mean(&dte), mean(&ste));
     let (pd, ps) = (p2p(&dte), p2p(&ste));
-    eprintln!("static limit at {torque} N·m: mean DTE {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
-        md * 1e6, ms * 1e6, (md / ms - 1.0) * 100.0, pd * 1e6, ps * 1e6, (pd / ps - 1.0) * 100.0);
+    eprintln!(
+        "static limit at {torque} N·m: mean DTE {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
+        md * 1e6,
+        ms * 1e6,
+        (md / ms - 1.0) * 100.0,
+        pd * 1e6,
+        ps * 1e6,
+        (pd / ps - 1.0) * 100.0
+    );
     assert!((md / ms - 1.0).abs() < 0.02);
     assert!((pd / ps - 1.0).abs() < 0.05);
 }
@@ -244,7 +263,11 @@ fn undamped_pair_conserves_energy_over_ten_mesh_cycles() {
     let (drift_band, vib_band, _, _) = run(2.5e-7, Loading::HertzBand);
     eprintln!("energy (point loads): total {e0:.4} J, peak vibration energy {vib:.3e} J, max drift {drift:.3e} J ({:.2e} of total, {:.2e} of vibration); anchors {anchors:?}",
         drift / e0.abs(), drift / vib);
-    eprintln!("energy (Hertz band): max drift {drift_band:.3e} J ({:.2e} of total, {:.2e} of vibration)", drift_band / e0.abs(), drift_band / vib_band);
+    eprintln!(
+        "energy (Hertz band): max drift {drift_band:.3e} J ({:.2e} of total, {:.2e} of vibration)",
+        drift_band / e0.abs(),
+        drift_band / vib_band
+    );
     assert!(anchors[1] >= 10);
     assert!(drift < 1e-4 * e0.abs() && drift < 1e-3 * vib);
     assert!(drift_band < 1e-4 * e0.abs() && drift_band < 3e-2 * vib_band);
@@ -261,6 +284,12 @@ fn a_start_on_a_pitch_boundary_steps() {
     for theta in [-1e-20, -0.0, 1e-300, -1e-300] {
         let mut s = m.initial_state([theta, theta], [0.0, 0.0]);
         dynamics.step(&mut s, [0.0, -0.0], 2e-6).unwrap();
-        assert_eq!(s.anchor, [(s.theta[0] / m.gears[0].pitch_rad()).floor() as i64, (s.theta[1] / m.gears[1].pitch_rad()).floor() as i64]);
+        assert_eq!(
+            s.anchor,
+            [
+                (s.theta[0] / m.gears[0].pitch_rad()).floor() as i64,
+                (s.theta[1] / m.gears[1].pitch_rad()).floor() as i64
+            ]
+        );
     }
 }

@@ -433,7 +433,8 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
     };
     let started = std::time::Instant::now();
     let bar = spinner("PMOR-Hertz build".into());
-    let (model, report) = build_dynamic_model(pair, mesh, &options, |m| bar.set_message(m)).map_err(anyhow::Error::msg)?;
+    let (model, report) =
+        build_dynamic_model(pair, mesh, &options, |m| bar.set_message(m)).map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
     for i in 0..2 {
         let g = &model.gears[i];

@@ -295,7 +295,14 @@ pub fn build_dynamic_model(
         }
         let f = from_columns(&fields);
         let mut mf = Mat::zeros(f.nrows(), f.ncols());
-        sparse_dense_matmul(mf.as_mut(), Accum::Replace, g.mass_full.as_ref(), f.as_ref(), 1.0, faer::get_global_parallelism());
+        sparse_dense_matmul(
+            mf.as_mut(),
+            Accum::Replace,
+            g.mass_full.as_ref(),
+            f.as_ref(),
+            1.0,
+            faer::get_global_parallelism(),
+        );
         let gram = f.transpose() * &mf;
         let gs = |a: usize, t: usize| 1 + 2 * n_k + a * n_t + t;
         let sc = |a: usize, t: usize| 1 + 2 * n_k + n_a * n_t + a * n_t + t;

@@ -84,9 +84,17 @@ fn merged(mut shares: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
 
 /// The penetration and the effective radius of curvature of pair j, section s, at perturbed
 /// poses (for ∂α/∂θ and ∂R/∂θ).
-fn penetration_at(model: &PmorModel, place: &PairPlacement, poses: [&GearPose; 2], j: i64, section: usize, z_mid: f64) -> Result<Option<(f64, f64)>, String> {
+fn penetration_at(
+    model: &PmorModel,
+    place: &PairPlacement,
+    poses: [&GearPose; 2],
+    j: i64,
+    section: usize,
+    z_mid: f64,
+) -> Result<Option<(f64, f64)>, String> {
     let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, section, z_mid) else { return Ok(None) };
-    let radius = c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
+    let radius =
+        c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
     let mut alpha = c.rigid_penetration_m;
     for i in 0..2 {
         let (shares, n, _) = reference_point(model, i, poses[i], &c)?;
@@ -186,18 +194,15 @@ pub fn contact_loads(
             // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
             // along the penetration's change, plus the potential's change with the radii of
             // curvature as the contact point travels (the law's geometry).
-            let transverse_radius = c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
+            let transverse_radius =
+                c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
             // ∂W/∂R for the transverse R that `penetration_at` returns (the law's R is R/cos β_b).
             let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius;
             for i in 0..2 {
                 let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
                     let theta = poses[i].theta + sign * ANGLE_STEP;
-                    let pose = GearPose {
-                        theta,
-                        anchor: poses[i].anchor,
-                        stencil: restage(i, theta)?,
-                        eta: poses[i].eta,
-                    };
+                    let pose =
+                        GearPose { theta, anchor: poses[i].anchor, stencil: restage(i, theta)?, eta: poses[i].eta };
                     let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
                     penetration_at(model, place, both, j, s, z_mid)
                 };

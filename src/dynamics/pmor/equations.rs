@@ -251,7 +251,8 @@ pub fn gear_terms(
         for m in 0..n_t {
             let (yg, ys) = (y[gs(a) + m], y[sc(a) + m]);
             // ∂T/∂θ
-            f_theta += yg * omega * dw[a] / d * eta_psi[m] + ys * (omega * ddw[a] / (d * d) * eta_psi[m] + dw[a] / d * etad_psi[m]);
+            f_theta += yg * omega * dw[a] / d * eta_psi[m]
+                + ys * (omega * ddw[a] / (d * d) * eta_psi[m] + dw[a] / d * etad_psi[m]);
             // ∂T/∂η_Ψ
             force[1 + n_k + m] += yg * omega * w[a] + ys * omega * dw[a] / d;
             // Ċᵀy

@@ -118,8 +118,20 @@ impl Layout {
 }
 
 impl<'a> PmorDynamics<'a> {
-    pub fn new(model: &'a PmorModel, place: &'a PairPlacement, damping: [Damping; 2], added_inertia_kgm2: [f64; 2]) -> Self {
-        PmorDynamics { model, place, damping, added_inertia_kgm2, loading: Loading::HertzBand, gram_cache: Default::default() }
+    pub fn new(
+        model: &'a PmorModel,
+        place: &'a PairPlacement,
+        damping: [Damping; 2],
+        added_inertia_kgm2: [f64; 2],
+    ) -> Self {
+        PmorDynamics {
+            model,
+            place,
+            damping,
+            added_inertia_kgm2,
+            loading: Loading::HertzBand,
+            gram_cache: Default::default(),
+        }
     }
 
     /// N of gear i's interval starting at stored sample a0 (cached).
