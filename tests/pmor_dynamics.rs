@@ -293,3 +293,58 @@ fn a_start_on_a_pitch_boundary_steps() {
         );
     }
 }
+
+/// The contact's angle forces are the gradient of the contact potential (evidence: a central
+/// difference of W = Σ P·α − W*(P) itself, at fixed η): −∂W/∂θᵢ by the closed form on conjugate
+/// contact (rigid arm, the point sliding along the deformed flank, the shapes turning with the
+/// gear, the radii of curvature travelling) and by differences at tip corners. States along a
+/// whole mesh cycle of a loaded run, so η is far from zero and every contact kind occurs.
+#[test]
+fn contact_angle_forces_are_the_gradient_of_the_contact_potential() {
+    let f = fixture();
+    let m = &f.model;
+    let rb = base_radii(m);
+    let dynamics = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
+    let torque = 370.0;
+    let mean_static = f.statics[1].iter().sum::<f64>() / f.statics[1].len() as f64;
+    let pitch2 = 2.0 * PI / m.pair.gear2.teeth as f64;
+    let w2 = 50.0;
+    let mut s = m.initial_state([mean_static / rb[0], 0.0], [w2 * rb[1] / rb[0], w2]);
+    let (mut checked, mut worst) = (0, 0.0_f64);
+    let mut k = 0;
+    while s.theta[1] < pitch2 {
+        let brake = -torque * rb[1] / rb[0] - 20.0 * (s.omega[1] - w2);
+        dynamics.step(&mut s, [torque, brake], 2e-6).unwrap();
+        k += 1;
+        if k % 40 != 0 {
+            continue;
+        }
+        let at = dynamics.outputs(&s).unwrap();
+        if at.contact.normal_force_n == 0.0 {
+            continue; // the start's rebound
+        }
+        for i in 0..2 {
+            let h = 1e-7;
+            let mut up = s.clone();
+            up.theta[i] += h;
+            let mut down = s.clone();
+            down.theta[i] -= h;
+            let slope =
+                (dynamics.outputs(&up).unwrap().contact_j - dynamics.outputs(&down).unwrap().contact_j) / (2.0 * h);
+            let force = at.contact.force[i][0];
+            // Scale: the mesh torque on the gear.
+            let error = (force + slope).abs() / (rb[i] * at.contact.normal_force_n);
+            worst = worst.max(error);
+            assert!(
+                error < 1e-5,
+                "gear {} at θ₂ = {:.5}: F_θ {force:.6} N·m, −∂W/∂θ {:.6} N·m",
+                i + 1,
+                s.theta[1],
+                -slope
+            );
+            checked += 1;
+        }
+    }
+    eprintln!("angle forces against −∂W/∂θ: {checked} checks, worst {worst:.2e} of the mesh torque");
+    assert!(checked > 40);
+}

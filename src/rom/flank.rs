@@ -124,6 +124,23 @@ impl FlankGrid {
         Some(out)
     }
 
+    /// d/dr of [`FlankGrid::point_shares`]: the same nodes, the profile weights' slopes ∓1/Δr
+    /// (zero where the radius is clamped to the flank's extent, as the shares are constant there).
+    pub fn point_share_slopes(&self, tooth: usize, r: f64, section: usize) -> Option<Shares> {
+        let slot = self.tooth_slot(tooth)?;
+        let rows = &self.row_radius_m;
+        let (row, _) = self.row_of(r);
+        let inside = r > rows[0] && r < rows[rows.len() - 1];
+        let slope = if inside { 1.0 / (rows[row + 1] - rows[row]) } else { 0.0 };
+        let mut out = Vec::with_capacity(4);
+        for (dr, wr) in [(0, -slope), (1, slope)] {
+            for dl in 0..2 {
+                out.push((self.index(slot, row + dr, section + dl), 0.5 * wr));
+            }
+        }
+        Some(out)
+    }
+
     /// Shares of the point at radius r on node layer `layer` of `tooth`'s flank.
     pub fn layer_shares(&self, tooth: usize, r: f64, layer: usize) -> Option<Shares> {
         let slot = self.tooth_slot(tooth)?;

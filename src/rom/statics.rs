@@ -13,7 +13,7 @@
 //! The contact search is redone at the converged angle until the transmission error settles.
 
 use super::reductor::ReducedGear;
-use crate::contact::hertz::{series_force, ApproachLaw};
+use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{ContactKind, PairPlacement, SectionContact};
 use crate::dynamics::iso6336;
 use crate::gear::GearPair;
@@ -104,7 +104,7 @@ impl Element {
     fn force(&self, alpha: f64) -> Result<(f64, f64), String> {
         match &self.law {
             Law::Hertz { contact, .. } => {
-                let p = series_force(contact, 0.0, alpha)?;
+                let p = contact.force(alpha)?;
                 Ok((p, if p > 0.0 { 1.0 / contact.compliance(p) } else { 0.0 }))
             }
             Law::Penalty { stiffness_n_per_m: k } => Ok(if alpha > 0.0 { (k * alpha, *k) } else { (0.0, 0.0) }),

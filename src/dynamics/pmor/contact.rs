@@ -5,21 +5,26 @@
 //! Per tooth pair j and axial section the penetration is α = α₀(θ₁, θ₂) + Σᵢ nᵢᵀuᵢ at the
 //! contact point of the rigid search (the deformation enters along the flank normals, as in the
 //! statics); the force P(α) inverts the load–approach relation; its generalized forces are
-//! P·Vᵀ(band shares) on η (the Hertz pressure band, as in the statics) and −P·∂α/∂θᵢ on the
-//! angles. ∂α/∂θᵢ is a central difference of α at fixed η: it carries the rigid arm, the sliding
-//! of the contact point along the deformed flank and the turning of the shape basis, so the
-//! angle forces are exactly the derivative of the contact potential W = P·α − W*(P) that the
-//! energy balance counts (at a fixed law; the radii of curvature move with θ too).
+//! P·Vᵀ(band shares) on η (the Hertz pressure band, as in the statics) and −∂W/∂θᵢ on the
+//! angles, W = P·α − W*(P) the contact potential that the energy balance counts.
+//!
+//! ∂W/∂θᵢ at fixed η = P·∂α/∂θᵢ + ∂W/∂R·∂R/∂θᵢ. For conjugate contact it is exact and cheap:
+//! the contact point sits on the line of action at u = u_C + r_b2·θ₂ (+ the helix's axial
+//! shift), so α₀ = cos β_b·(r_b1θ₁ − r_b2θ₂) + const, both flank radii and the radii of
+//! curvature move with θ₂ alone, and each gear's nᵀu changes through the point sliding along
+//! the flank (the bilinear shares and the interpolated normal) and through the shapes turning
+//! with the gear (Ψ'(ϑ)). At a tip corner the geometry has no such closed form and ∂α/∂θ is a
+//! central difference of the same search at fixed η.
 //!
 //! A tooth on gear i at pitch anchor kᵢ (θᵢ = kᵢ·pitch + ϑᵢ) carries the field of reference tooth
 //! t + kᵢ: the one-tooth rotation P moves content of tooth t + 1 onto tooth t.
 
 use super::equations::Stencil;
 use super::model::PmorModel;
-use crate::contact::hertz::series_force;
-use crate::contact::mesh_kinematics::{PairPlacement, SectionContact};
+use crate::contact::mesh_kinematics::{ContactKind, PairPlacement, SectionContact};
+use crate::rom::flank::Shares;
 
-/// Angle step of the central differences ∂α/∂θ (rad).
+/// Angle step of the central differences ∂α/∂θ at tip corners (rad).
 const ANGLE_STEP: f64 = 1e-7;
 
 /// The kinematic state of one gear that the contact reads.
@@ -46,27 +51,93 @@ pub struct ContactLoads {
     pub pair_forces: Vec<(i64, f64)>,
 }
 
-/// Shares and normal of a contact point on gear i's reference flank.
-fn reference_point(
+/// Gear i's elastic approach at a contact point: nᵀũ, with n the flank normal and ũ the
+/// displacement interpolated there, and its derivatives along the flank radius and in the
+/// gear's angle at fixed η.
+struct ElasticApproach {
+    value_m: f64,
+    per_radius: f64,
+    per_angle_m: f64,
+    /// The reference tooth the point lies on, its shares and normal (for the loads).
+    tooth: usize,
+    shares: Shares,
+    normal: [f64; 3],
+}
+
+fn elastic_approach(
     model: &PmorModel,
     i: usize,
     pose: &GearPose,
     c: &SectionContact,
-) -> Result<(Vec<(usize, f64)>, [f64; 3], usize), String> {
+) -> Result<ElasticApproach, String> {
     let g = &model.gears[i];
     let z = g.teeth as i64;
     let tooth = (c.teeth[i] as i64 + pose.anchor).rem_euclid(z) as usize;
-    let shares = g.flank.point_shares(tooth, c.radius_m[i], c.section).ok_or_else(|| {
-        format!("contact on reference tooth {tooth} of gear {}: outside the stored flank rows", i + 1)
-    })?;
-    let n = g.flank.normal(&shares);
-    Ok((shares, n, tooth))
+    let outside = || format!("contact on reference tooth {tooth} of gear {}: outside the stored flank rows", i + 1);
+    let shares = g.flank.point_shares(tooth, c.radius_m[i], c.section).ok_or_else(outside)?;
+    let slopes = g.flank.point_share_slopes(tooth, c.radius_m[i], c.section).ok_or_else(outside)?;
+    // n = m/|m| with m = Σ w·nₖ; dn/dr = (m' − n(n·m'))/|m|.
+    let (mut m, mut dm) = ([0.0; 3], [0.0; 3]);
+    let (mut u, mut du_dr, mut du_dtheta) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    for (&(k, w), &(_, dw)) in shares.iter().zip(&slopes) {
+        let n_k = g.flank.nodes[k].1;
+        let (u_k, du_k) = g.node_displacement(&pose.stencil, k, pose.eta);
+        for c in 0..3 {
+            m[c] += w * n_k[c];
+            dm[c] += dw * n_k[c];
+            u[c] += w * u_k[c];
+            du_dr[c] += dw * u_k[c];
+            du_dtheta[c] += w * du_k[c];
+        }
+    }
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let norm = dot(m, m).sqrt();
+    let n = m.map(|v| v / norm);
+    let n_dm = dot(n, dm);
+    let dn = [0, 1, 2].map(|c| (dm[c] - n[c] * n_dm) / norm);
+    Ok(ElasticApproach {
+        value_m: dot(n, u),
+        per_radius: dot(dn, u) + dot(n, du_dr),
+        per_angle_m: dot(n, du_dtheta),
+        tooth,
+        shares,
+        normal: n,
+    })
 }
 
-/// n·u at a contact point of gear i (u interpolated from the flank nodes by the shares).
-fn normal_displacement(model: &PmorModel, i: usize, pose: &GearPose, shares: &[(usize, f64)], n: [f64; 3]) -> f64 {
-    let g = &model.gears[i];
-    shares.iter().map(|&(k, w)| w * g.normal_displacement(&pose.stencil, k, n, pose.eta)).sum()
+/// The penetration and the transverse effective radius of curvature of pair j, section s, at
+/// perturbed poses (the tip corners' central differences).
+fn penetration_at(
+    model: &PmorModel,
+    place: &PairPlacement,
+    poses: [&GearPose; 2],
+    j: i64,
+    section: usize,
+    z_mid: f64,
+) -> Result<Option<(f64, f64)>, String> {
+    let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, section, z_mid) else { return Ok(None) };
+    let mut alpha = c.rigid_penetration_m;
+    for i in 0..2 {
+        alpha += elastic_approach(model, i, poses[i], &c)?.value_m;
+    }
+    Ok(Some((alpha, transverse_radius(&c))))
+}
+
+fn transverse_radius(c: &SectionContact) -> f64 {
+    c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1])
+}
+
+/// ∂α/∂θᵢ and ∂R/∂θᵢ (R transverse) of a conjugate contact at fixed η, in closed form.
+fn conjugate_slopes(model: &PmorModel, c: &SectionContact, e: &[ElasticApproach; 2]) -> ([f64; 2], [f64; 2]) {
+    let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
+    // u from T₁ and v = L − u from T₂ along the line of action; du/dθ₂ = r_b2.
+    let [u, v] = c.curvature_radius_m;
+    let radius_slope = [u * rb[1] / c.radius_m[0], -v * rb[1] / c.radius_m[1]];
+    let alpha = [
+        c.arm_ratio * rb[0] + e[0].per_angle_m,
+        -c.arm_ratio * rb[1] + e[1].per_angle_m + e[0].per_radius * radius_slope[0] + e[1].per_radius * radius_slope[1],
+    ];
+    (alpha, [0.0, rb[1] * (v - u) / (u + v)])
 }
 
 /// Shares with repeated nodes merged (the band's quadrature points fall on a few nodes).
@@ -80,27 +151,6 @@ fn merged(mut shares: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
         }
     }
     out
-}
-
-/// The penetration and the effective radius of curvature of pair j, section s, at perturbed
-/// poses (for ∂α/∂θ and ∂R/∂θ).
-fn penetration_at(
-    model: &PmorModel,
-    place: &PairPlacement,
-    poses: [&GearPose; 2],
-    j: i64,
-    section: usize,
-    z_mid: f64,
-) -> Result<Option<(f64, f64)>, String> {
-    let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, section, z_mid) else { return Ok(None) };
-    let radius =
-        c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
-    let mut alpha = c.rigid_penetration_m;
-    for i in 0..2 {
-        let (shares, n, _) = reference_point(model, i, poses[i], &c)?;
-        alpha += normal_displacement(model, i, poses[i], &shares, n);
-    }
-    Ok(Some((alpha, radius)))
 }
 
 /// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂.
@@ -151,18 +201,13 @@ pub fn contact_loads(
         for s in 0..layers.len() - 1 {
             let z_mid = 0.5 * (layers[s] + layers[s + 1]);
             let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, s, z_mid) else { continue };
-            let mut alpha = c.rigid_penetration_m;
-            let mut refs = Vec::with_capacity(2);
-            for i in 0..2 {
-                let (shares, n, tooth) = reference_point(model, i, poses[i], &c)?;
-                alpha += normal_displacement(model, i, poses[i], &shares, n);
-                refs.push(tooth);
-            }
+            let e = [elastic_approach(model, 0, poses[0], &c)?, elastic_approach(model, 1, poses[1], &c)?];
+            let alpha = c.rigid_penetration_m + e[0].value_m + e[1].value_m;
             if alpha <= 0.0 {
                 continue;
             }
             let law = c.line_contact(p, layers[s + 1] - layers[s], info.depth_m, info.law);
-            let force = series_force(&law, 0.0, alpha)?;
+            let force = law.force(alpha)?;
             if force <= 0.0 {
                 continue;
             }
@@ -174,15 +219,12 @@ pub fn contact_loads(
                     Loading::HertzBand => (
                         merged(
                             g.flank
-                                .band_shares(refs[i], c.radius_m[i], beta, base[i], s)
+                                .band_shares(e[i].tooth, c.radius_m[i], beta, base[i], s)
                                 .ok_or("band outside the stored flank")?,
                         ),
                         None,
                     ),
-                    Loading::Point => {
-                        let (shares, n, _) = reference_point(model, i, poses[i], &c)?;
-                        (shares, Some(n))
-                    }
+                    Loading::Point => (e[i].shares.clone(), Some(e[i].normal)),
                 };
                 for &(k, w) in &band {
                     g.basis_row(&poses[i].stencil, k, normal.unwrap_or(g.flank.nodes[k].1), &mut tmp[i]);
@@ -194,21 +236,34 @@ pub fn contact_loads(
             // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
             // along the penetration's change, plus the potential's change with the radii of
             // curvature as the contact point travels (the law's geometry).
-            let transverse_radius =
-                c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1]);
-            // ∂W/∂R for the transverse R that `penetration_at` returns (the law's R is R/cos β_b).
-            let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius;
+            // ∂W/∂R for the transverse R (the law's R is R/cos β_b).
+            let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius(&c);
+            let (alpha_slope, radius_slope) = match c.kind {
+                ContactKind::Conjugate => conjugate_slopes(model, &c, &e),
+                ContactKind::TipOfGear1 | ContactKind::TipOfGear2 => {
+                    let mut slopes = ([0.0; 2], [0.0; 2]);
+                    for i in 0..2 {
+                        let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
+                            let theta = poses[i].theta + sign * ANGLE_STEP;
+                            let pose = GearPose {
+                                theta,
+                                anchor: poses[i].anchor,
+                                stencil: restage(i, theta)?,
+                                eta: poses[i].eta,
+                            };
+                            let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
+                            penetration_at(model, place, both, j, s, z_mid)
+                        };
+                        // A difference that leaves the corner's reach contributes nothing.
+                        let (Some(up), Some(down)) = (shifted(1.0)?, shifted(-1.0)?) else { continue };
+                        slopes.0[i] = (up.0 - down.0) / (2.0 * ANGLE_STEP);
+                        slopes.1[i] = (up.1 - down.1) / (2.0 * ANGLE_STEP);
+                    }
+                    slopes
+                }
+            };
             for i in 0..2 {
-                let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
-                    let theta = poses[i].theta + sign * ANGLE_STEP;
-                    let pose =
-                        GearPose { theta, anchor: poses[i].anchor, stencil: restage(i, theta)?, eta: poses[i].eta };
-                    let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
-                    penetration_at(model, place, both, j, s, z_mid)
-                };
-                let (Some(up), Some(down)) = (shifted(1.0)?, shifted(-1.0)?) else { continue };
-                out.force[i][0] -= force * (up.0 - down.0) / (2.0 * ANGLE_STEP);
-                out.force[i][0] -= dw_dr * (up.1 - down.1) / (2.0 * ANGLE_STEP);
+                out.force[i][0] -= force * alpha_slope[i] + dw_dr * radius_slope[i];
             }
             out.normal_force_n += force;
             out.potential_j += force * alpha - law.complementary_energy(force);

@@ -38,26 +38,27 @@ impl PmorGear {
         Ok(Stencil { a0: (s as i64 + 1) as usize, weights: interpolation.weights(p), step })
     }
 
-    /// dirᵀu at a flank node for elastic coordinates η: dirᵀ(Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ).
-    pub fn normal_displacement(&self, st: &Stencil, node: usize, dir: [f64; 3], eta: &[f64]) -> f64 {
+    /// The displacement u = Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ of flank node k (gear frame) and its
+    /// derivative ∂u/∂ϑ at fixed η (the shapes' interpolation turning with the gear).
+    pub fn node_displacement(&self, st: &Stencil, node: usize, eta: &[f64]) -> ([f64; 3], [f64; 3]) {
         let n_k = self.modes();
-        let mut u = 0.0;
+        let (eta_phi, eta_psi) = eta.split_at(n_k);
+        let (mut u, mut du) = ([0.0; 3], [0.0; 3]);
         for c in 0..3 {
-            if dir[c] == 0.0 {
-                continue;
-            }
             let r = 3 * node + c;
-            let mut v: f64 = (0..n_k).map(|j| self.flank_phi[(r, j)] * eta[j]).sum();
+            u[c] = (0..n_k).map(|j| self.flank_phi[(r, j)] * eta_phi[j]).sum();
             for a in 0..4 {
-                let w = st.weights.w[a];
-                if w != 0.0 {
-                    let s = &self.flank_shapes[st.a0 + a];
-                    v += w * (0..self.shapes).map(|t| s[(r, t)] * eta[n_k + t]).sum::<f64>();
+                let (w, dw) = (st.weights.w[a], st.weights.dw[a] / st.step);
+                if w == 0.0 && dw == 0.0 {
+                    continue;
                 }
+                let s = &self.flank_shapes[st.a0 + a];
+                let v: f64 = (0..self.shapes).map(|t| s[(r, t)] * eta_psi[t]).sum();
+                u[c] += w * v;
+                du[c] += dw * v;
             }
-            u += dir[c] * v;
         }
-        u
+        (u, du)
     }
 
     /// Row of the basis V = [Φ, Ψ] for a direction at a flank node: dirᵀ·[Φ_k, Σₐ wₐ S_{a,k}].

@@ -1,0 +1,145 @@
+//! Cost of the PMOR-Hertz reduced pair, measured in release mode (`cargo bench --bench pmor`).
+//!
+//! Baseline, run in the same process: the lumped FMU's model (`dynamics::lumped`) on the same
+//! pair and the same loading. Reported: µs per right-hand side and per RK4 step of the reduced
+//! pair (ratio to the lumped RK4 step), and the seed's example 3 (185 N·m haversine ramp 5 ms,
+//! viscous 20 N·m·s/rad on gear 2, 25 ms, communication step 0.1 ms) as wall time and real-time
+//! factor for both models at their default max_step (PMOR-Hertz 2 µs, lumped 1 µs).
+//!
+//! The reduced pair is built here with the default options (about 15 s), so the figures belong
+//! to the same model `fmu-build build` ships.
+
+use gearfmu::contact::mesh_kinematics::PairPlacement;
+use gearfmu::dynamics::fmu::PMOR_DEFAULT_MAX_STEP_S;
+use gearfmu::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedState};
+use gearfmu::dynamics::pmor::PmorDynamics;
+use gearfmu::fe::gear_mesh::MeshSpec;
+use gearfmu::gear::{GearPair, PairSpec};
+use gearfmu::rom::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions};
+use std::hint::black_box;
+use std::time::Instant;
+
+fn median(mut samples: Vec<f64>) -> f64 {
+    samples.sort_by(f64::total_cmp);
+    samples[samples.len() / 2]
+}
+
+fn seed_torque(t: f64) -> f64 {
+    185.0 * if t < 5e-3 { 0.5 * (1.0 - (std::f64::consts::PI * t / 5e-3).cos()) } else { 1.0 }
+}
+
+const COMM_STEP_S: f64 = 1e-4;
+const END_S: f64 = 25e-3;
+
+fn main() {
+    let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
+    let pair = GearPair::from_spec(&PairSpec::load(&spec).unwrap()).unwrap();
+    let built = Instant::now();
+    let (model, _) = build_dynamic_model(&pair, &MeshSpec::default(), &DynamicBuildOptions::default(), |_| {}).unwrap();
+    println!("offline build (default options): {:.1} s", built.elapsed().as_secs_f64());
+    let place = PairPlacement::new(&model.pair);
+    let dynamics = PmorDynamics::new(
+        &model,
+        &place,
+        model.damping(model.modal_damping_ratio, model.shape_damping_ratio),
+        [0.0; 2],
+    );
+
+    // Example 3 through the model's own sub-stepping, as the FMU runs it.
+    let example_3 = |runs: usize| {
+        let mut walls = Vec::new();
+        let mut last = None;
+        for _ in 0..runs {
+            let mut s = model.initial_state([0.0; 2], [0.0; 2]);
+            let t0 = Instant::now();
+            for k in 0..(END_S / COMM_STEP_S).round() as usize {
+                let t = k as f64 * COMM_STEP_S;
+                let torques = [seed_torque(t), -20.0 * s.omega[1]];
+                dynamics.advance(&mut s, torques, COMM_STEP_S, PMOR_DEFAULT_MAX_STEP_S).unwrap();
+            }
+            walls.push(t0.elapsed().as_secs_f64());
+            last = Some(s);
+        }
+        (median(walls), last.unwrap())
+    };
+    let (pmor_wall, loaded) = example_3(3);
+
+    // Per right-hand side and per RK4 step, at the loaded state example 3 ends in.
+    let y = dynamics.pack(&loaded);
+    let torques = [185.0, -20.0 * loaded.omega[1]];
+    let n = 2000;
+    let rhs_us = median(
+        (0..5)
+            .map(|_| {
+                let t0 = Instant::now();
+                for _ in 0..n {
+                    black_box(dynamics.rhs(black_box(&y), loaded.anchor, torques).unwrap());
+                }
+                t0.elapsed().as_secs_f64() / n as f64 * 1e6
+            })
+            .collect(),
+    );
+    let step_us = median(
+        (0..5)
+            .map(|_| {
+                let mut s = loaded.clone();
+                let t0 = Instant::now();
+                for _ in 0..n {
+                    dynamics.step(&mut s, torques, PMOR_DEFAULT_MAX_STEP_S).unwrap();
+                }
+                black_box(s);
+                t0.elapsed().as_secs_f64() / n as f64 * 1e6
+            })
+            .collect(),
+    );
+
+    // The lumped model, same process, same loading.
+    let mesh = LumpedMesh::from_pair(&pair).unwrap();
+    let lumped = LumpedModel::with_defaults(&mesh);
+    let lumped_step_us = median(
+        (0..5)
+            .map(|_| {
+                let mut s = LumpedState::default();
+                let steps = 200_000;
+                let t0 = Instant::now();
+                for k in 0..steps {
+                    s = lumped.rk4_step(&s, [seed_torque(k as f64 * 1e-6), -20.0 * s.omega_2], 1e-6);
+                }
+                black_box(s);
+                t0.elapsed().as_secs_f64() / steps as f64 * 1e6
+            })
+            .collect(),
+    );
+    let lumped_wall = median(
+        (0..5)
+            .map(|_| {
+                let mut s = LumpedState::default();
+                let t0 = Instant::now();
+                for k in 0..(END_S / COMM_STEP_S).round() as usize {
+                    let t = k as f64 * COMM_STEP_S;
+                    let torques = [seed_torque(t), -20.0 * s.omega_2];
+                    lumped.advance(&mut s, torques, COMM_STEP_S, 1e-6);
+                }
+                black_box(s);
+                t0.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+
+    println!("PMOR-Hertz right-hand side: {rhs_us:.2} µs (state size {})", y.len());
+    println!(
+        "PMOR-Hertz RK4 step: {step_us:.1} µs; lumped RK4 step: {:.3} µs; ratio {:.0}",
+        lumped_step_us,
+        step_us / lumped_step_us
+    );
+    println!(
+        "example 3 (25 ms, comm 0.1 ms): PMOR-Hertz at {:.0} µs {:.3} s wall (real-time factor {:.1}, {:.2} ms per doStep); lumped at 1 µs {:.2} ms wall; ratio {:.0}",
+        PMOR_DEFAULT_MAX_STEP_S * 1e6,
+        pmor_wall,
+        pmor_wall / END_S,
+        pmor_wall / (END_S / COMM_STEP_S) * 1e3,
+        lumped_wall * 1e3,
+        pmor_wall / lumped_wall
+    );
+    println!("example 3 end: ω₂ = {:.4} rad/s", loaded.omega[1]);
+}
