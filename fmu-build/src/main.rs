@@ -374,7 +374,7 @@ fn build(
                 ("inertia_1", m.gears[0].polar_inertia_kgm2),
                 ("inertia_2", m.gears[1].polar_inertia_kgm2),
                 ("mesh_damping_ratio", m.shape_damping_ratio),
-                ("max_step", gearfmu::dynamics::fmu::PMOR_DEFAULT_MAX_STEP_S),
+                ("max_step", m.max_step_s),
             ],
             format!(
                 "Gear pair {} (z {}/{}), PMOR-Hertz model: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), Hertz contact",
@@ -454,6 +454,17 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
             report.n_sv[i],
         );
     }
+    let f = &report.step.natural_frequencies_hz;
+    println!(
+        "linearized at {:.0} N·m: lowest natural frequencies {:.0}, {:.0}, {:.0} … highest {:.0} Hz; RK4 stable to {:.2} µs, default max_step {:.1} µs",
+        report.step.torque_nm,
+        f[1],
+        f[2],
+        f[3],
+        f[f.len() - 1],
+        report.step.rk4_limit_s * 1e6,
+        report.step.max_step_s * 1e6
+    );
     println!("offline build {:.1} s", started.elapsed().as_secs_f64());
     Ok(model)
 }

@@ -124,11 +124,6 @@ pub struct GearPairFmu {
     lookup: Vec<(u32, Var)>,
 }
 
-/// The PMOR-Hertz model's internal step bound by default (s). Measured on example 3 (default
-/// spur build, `scripts/example3.py --max-step`): RK4 is stable up to 7 µs (10 µs diverges); the
-/// DTE's mean and peak-to-peak at 2 µs equal those at 0.5 µs within 0.05 %. 2 µs keeps a margin
-/// of 3.5 for stiffer contacts at higher loads. The paper ran 1 µs (Table 10).
-pub const PMOR_DEFAULT_MAX_STEP_S: f64 = 2e-6;
 /// The lumped model's (s).
 pub const LUMPED_DEFAULT_MAX_STEP_S: f64 = 1e-5;
 
@@ -240,7 +235,7 @@ impl Model for GearPairFmu {
         let (max_step_s, params) = match &self.physics {
             Physics::Lumped(mesh) => (LUMPED_DEFAULT_MAX_STEP_S, LumpedParameters::defaults(mesh)),
             Physics::PmorHertz { model, .. } => (
-                PMOR_DEFAULT_MAX_STEP_S,
+                model.max_step_s,
                 LumpedParameters {
                     inertia_1_kgm2: model.gears[0].polar_inertia_kgm2,
                     inertia_2_kgm2: model.gears[1].polar_inertia_kgm2,

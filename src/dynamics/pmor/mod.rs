@@ -7,6 +7,7 @@
 //! - [`equations`]: one gear's Lagrangian terms (mass matrix, quadratic velocity vector, elastic
 //!   and damping forces);
 //! - [`contact`]: the contact search, Hertz law and band on the deformed flanks;
+//! - [`linear`]: static equilibrium, linearization, natural frequencies, RK4's step limit;
 //! - this file: the state, the pitch anchors, the right-hand side and the integrator.
 //!
 //! The pitch anchor kᵢ of each gear is part of the state: the stored shapes cover the reference
@@ -17,6 +18,7 @@
 pub mod contact;
 pub mod equations;
 pub mod interpolation;
+pub mod linear;
 pub mod model;
 
 use crate::contact::mesh_kinematics::PairPlacement;

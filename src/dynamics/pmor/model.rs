@@ -131,5 +131,9 @@ pub struct PmorModel {
     /// values, 1 % and 5 %, taken at each coordinate's own frequency: `equations::Damping`).
     pub modal_damping_ratio: f64,
     pub shape_damping_ratio: f64,
+    /// The internal RK4 step bound the FMU starts with (s): a fraction of RK4's stability limit
+    /// on the pair linearized at a load above its range (`rom::dynamic_reductor`), so the step
+    /// follows the stiffest mode of this model instead of a constant.
+    pub max_step_s: f64,
     pub info: PmorBuildInfo,
 }
