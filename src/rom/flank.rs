@@ -163,21 +163,25 @@ impl FlankGrid {
         let slot = self.tooth_slot(tooth)?;
         // Along an involute ds = (r/r_b)·dr: the band's half-width in radius.
         let dr = half_width_m * base_radius_m / r;
-        let mut out: Shares = Vec::with_capacity(4 * POINTS);
+        // Profile weights per row, accumulated over the quadrature points (row_of is monotone,
+        // so the rows of the band's two ends bound them): one share per node.
+        let first = self.row_of(r - dr).0;
+        let span = self.row_of(r + dr).0 + 2 - first;
+        let mut row_weight = vec![0.0; span];
         let mut total = 0.0;
         for k in 1..=POINTS {
             let angle = std::f64::consts::PI * k as f64 / (POINTS + 1) as f64;
             let w = angle.sin().powi(2);
             total += w;
             let (row, t) = self.row_of(r + dr * angle.cos());
-            for (d, wr) in [(0, 1.0 - t), (1, t)] {
-                for dl in 0..2 {
-                    out.push((self.index(slot, row + d, section + dl), 0.5 * w * wr));
-                }
-            }
+            row_weight[row - first] += w * (1.0 - t);
+            row_weight[row + 1 - first] += w * t;
         }
-        for s in &mut out {
-            s.1 /= total;
+        let mut out: Shares = Vec::with_capacity(2 * span);
+        for (d, &w) in row_weight.iter().enumerate() {
+            for dl in 0..2 {
+                out.push((self.index(slot, first + d, section + dl), 0.5 * w / total));
+            }
         }
         Some(out)
     }

@@ -140,19 +140,6 @@ fn conjugate_slopes(model: &PmorModel, c: &SectionContact, e: &[ElasticApproach;
     (alpha, [0.0, rb[1] * (v - u) / (u + v)])
 }
 
-/// Shares with repeated nodes merged (the band's quadrature points fall on a few nodes).
-fn merged(mut shares: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
-    shares.sort_by_key(|s| s.0);
-    let mut out: Vec<(usize, f64)> = Vec::with_capacity(shares.len());
-    for (k, w) in shares {
-        match out.last_mut() {
-            Some(last) if last.0 == k => last.1 += w,
-            _ => out.push((k, w)),
-        }
-    }
-    out
-}
-
 /// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂.
 pub fn candidate_pairs(model: &PmorModel, theta2: f64) -> std::ops::RangeInclusive<i64> {
     let p = &model.pair;
@@ -217,11 +204,9 @@ pub fn contact_loads(
                 let g = &model.gears[i];
                 let (band, normal) = match loading {
                     Loading::HertzBand => (
-                        merged(
-                            g.flank
-                                .band_shares(e[i].tooth, c.radius_m[i], beta, base[i], s)
-                                .ok_or("band outside the stored flank")?,
-                        ),
+                        g.flank
+                            .band_shares(e[i].tooth, c.radius_m[i], beta, base[i], s)
+                            .ok_or("band outside the stored flank")?,
                         None,
                     ),
                     Loading::Point => (e[i].shares.clone(), Some(e[i].normal)),

@@ -198,7 +198,7 @@ pub fn gear_terms(
         }
         c
     };
-    let apply_ct = |v: &DVector<f64>| -> DVector<f64> {
+    let apply_ct = |v: &[f64]| -> DVector<f64> {
         let mut r = DVector::<f64>::zeros(n_q);
         let mut t = v[0];
         for j in 0..n_k {
@@ -224,17 +224,20 @@ pub fn gear_terms(
     let mut mass = DMatrix::<f64>::zeros(n_q, n_q);
     let mut e = DVector::<f64>::zeros(n_q);
     e[0] = 1.0;
-    let col = apply_ct(&(nm * apply_c(&e)));
+    let col = apply_ct((nm * apply_c(&e)).as_slice());
     mass.set_column(0, &col);
+    // N's columns as slices (column-major storage).
+    let nm_column = |j: usize| &nm.as_slice()[j * n_b..(j + 1) * n_b];
     for j in 0..n_k {
-        let col = apply_ct(&nm.column(phi + j).into_owned());
-        mass.set_column(1 + j, &col);
+        mass.set_column(1 + j, &apply_ct(nm_column(phi + j)));
     }
     for m in 0..n_t {
-        let mut nc = DVector::<f64>::zeros(n_b);
+        let mut nc = vec![0.0; n_b];
         for a in 0..4 {
             if w[a] != 0.0 {
-                nc.axpy(w[a], &nm.column(sc(a) + m), 1.0);
+                for (x, v) in nc.iter_mut().zip(nm_column(sc(a) + m)) {
+                    *x += w[a] * v;
+                }
             }
         }
         mass.set_column(1 + n_k + m, &apply_ct(&nc));
@@ -274,18 +277,24 @@ pub fn gear_terms(
             cdq[sc(a) + m] = omega * omega * ddw[a] / (d * d) * eta_psi[m] + 2.0 * omega * dw[a] / d * etad_psi[m];
         }
     }
-    force -= apply_ct(&(nm * cdq));
+    force -= apply_ct((nm * cdq).as_slice());
 
     // Elastic: Λ on Φ, K_Ψ(ϑ) = Σ wₐw_b K_ab on the shapes, and its ϑ-derivative.
     let mut k_psi = DMatrix::<f64>::zeros(n_t, n_t);
     let mut dk_psi = DMatrix::<f64>::zeros(n_t, n_t);
     for a in 0..4 {
         for b in 0..4 {
+            // K_ab is stored for a ≤ b; K_ba = K_abᵀ.
             let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
             let kab = &gear.pair_invariants(st.a0 + lo, st.a0 + hi).k_ss;
-            let kab = if a <= b { kab.clone() } else { kab.transpose() };
-            k_psi += &kab * (w[a] * w[b]);
-            dk_psi += &kab * ((dw[a] * w[b] + w[a] * dw[b]) / d);
+            let (f, df) = (w[a] * w[b], (dw[a] * w[b] + w[a] * dw[b]) / d);
+            for r in 0..n_t {
+                for c in 0..n_t {
+                    let v = if a <= b { kab[(r, c)] } else { kab[(c, r)] };
+                    k_psi[(r, c)] += f * v;
+                    dk_psi[(r, c)] += df * v;
+                }
+            }
         }
     }
     let psi = DVector::from_column_slice(eta_psi);
