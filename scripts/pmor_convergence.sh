@@ -30,5 +30,7 @@ row angles80 --angles 80
 row linear --interpolation linear
 row torque185 --rom-torques-nm 185
 row fine_mesh --across 6 --profile 12 --rim 6
-row step05us -- --max-step 5e-7
+
 row step5us -- --max-step 5e-6
+row step1us -- --max-step 1e-6
+row modes80 --modes 80
