@@ -31,22 +31,34 @@ struct Fixture {
 const STATIC_TORQUES: [f64; 2] = [185.0, 370.0];
 const STATIC_ANGLES: usize = 40;
 
+/// The reduced pair of an example spec on its own mesh, with the PMOR-Hertz statics of the same
+/// pair reduced separately (the reference: `fmu-build ste` with the ROM's depth and p_en).
+fn build_fixture(file: &str) -> Fixture {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
+    let spec = gearfmu::gear::PairSpec::load(&path).unwrap();
+    let pair = gearfmu::gear::GearPair::from_spec(&spec).unwrap();
+    let options = DynamicBuildOptions::default();
+    let (model, report) = build_dynamic_model(&pair, &spec.mesh, &options, |_| {}).unwrap();
+    let method = Method::PmorHertz { depth_m: options.depth_m, p_en: options.p_en, law: ApproachLaw::Weber };
+    let reduced = ReducedPair::build(&pair, &spec.mesh, method, |_, _| {}).unwrap();
+    let cases = reduced.sweep(&STATIC_TORQUES, STATIC_ANGLES, 1.0);
+    let statics = (0..STATIC_TORQUES.len())
+        .map(|t| (0..STATIC_ANGLES).map(|k| cases[t * STATIC_ANGLES + k].as_ref().unwrap().ste_m).collect())
+        .collect();
+    let place = PairPlacement::new(&model.pair);
+    Fixture { model, report, place, statics }
+}
+
+/// The default spur pair (`examples/kurokawa_spur.toml`, the default mesh): every test's.
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
-    F.get_or_init(|| {
-        let pair = common::kurokawa_spur();
-        let options = DynamicBuildOptions::default();
-        let (model, report) = build_dynamic_model(&pair, &MeshSpec::default(), &options, |_| {}).unwrap();
-        // The reference: `fmu-build ste` (the statics of issue 4) with the ROM's depth and p_en.
-        let method = Method::PmorHertz { depth_m: options.depth_m, p_en: options.p_en, law: ApproachLaw::Weber };
-        let reduced = ReducedPair::build(&pair, &MeshSpec::default(), method, |_, _| {}).unwrap();
-        let cases = reduced.sweep(&STATIC_TORQUES, STATIC_ANGLES, 1.0);
-        let statics = (0..STATIC_TORQUES.len())
-            .map(|t| (0..STATIC_ANGLES).map(|k| cases[t * STATIC_ANGLES + k].as_ref().unwrap().ste_m).collect())
-            .collect();
-        let place = PairPlacement::new(&model.pair);
-        Fixture { model, report, place, statics }
-    })
+    F.get_or_init(|| build_fixture("kurokawa_spur.toml"))
+}
+
+/// The helical pair on its spec's mesh (8 axial slices): the static limit's second pair.
+fn helical_fixture() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| build_fixture("kurokawa_helical.toml"))
 }
 
 fn base_radii(m: &PmorModel) -> [f64; 2] {
@@ -128,9 +140,7 @@ fn reduced_gears_match_the_fe_model_and_close_periodically() {
 /// frequency, 2.5 Hz, is 1/1500 of the mesh mode's, so inertia shifts the DTE by 4e-7 of itself.
 /// Over one whole mesh cycle the DTE reproduces the STE within 2 % of the mean and 5 % of the
 /// peak-to-peak. 370 N·m lies above the ROM's torque level (250): the shapes extrapolate.
-#[test]
-fn slow_run_reproduces_the_static_transmission_error() {
-    let f = fixture();
+fn static_limit(name: &str, f: &Fixture) {
     let m = &f.model;
     let rb = base_radii(m);
     let dynamics = PmorDynamics::new(m, &f.place, m.damping(0.1, 0.2), [0.0; 2]);
@@ -165,7 +175,7 @@ fn slow_run_reproduces_the_static_transmission_error() {
     let (md, ms) = (mean(&dte), mean(&ste));
     let (pd, ps) = (p2p(&dte), p2p(&ste));
     eprintln!(
-        "static limit at {torque} N·m: mean DTE {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
+        "{name}: static limit at {torque} N·m: mean DTE {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
         md * 1e6,
         ms * 1e6,
         (md / ms - 1.0) * 100.0,
@@ -175,6 +185,18 @@ fn slow_run_reproduces_the_static_transmission_error() {
     );
     assert!((md / ms - 1.0).abs() < 0.02);
     assert!((pd / ps - 1.0).abs() < 0.05);
+}
+
+#[test]
+fn slow_run_reproduces_the_static_transmission_error() {
+    static_limit("spur", fixture());
+}
+
+/// The same for the helical pair on its own mesh (8 slices, 3 tooth pairs in contact part of the
+/// cycle, tip-corner contact at the ends of each contact line).
+#[test]
+fn slow_run_reproduces_the_static_transmission_error_of_the_helical_pair() {
+    static_limit("helical", helical_fixture());
 }
 
 /// Example 3 of the seed (paper Sect. 6.2): 185 N·m on gear 1 after a 5 ms haversine ramp,
