@@ -2,6 +2,8 @@
 # Convergence of the PMOR-Hertz FMU on example 3 (BENCHMARKS.md): DTE mean and peak-to-peak over
 # the last mesh cycle and ω₂ at 25 ms, against the eigenmodes kept (n_k), the angular samples
 # (n_θ), the mesh and the internal step; each row is one build + one fmpy run of scripts/example3.py.
+# The DTE is sampled at a 20 µs communication step: at 0.1 ms the 3.8 kHz ringing of the mesh
+# mode is caught at 2.6 points per period and the peak-to-peak depends on the sampling phase.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/convergence}
@@ -17,11 +19,11 @@ row() {  # name, build options…, then "--" and example3 options
   ./target/release/fmu-build build "$spec" -o "$out/$name.fmu" "${build[@]}" > "$out/$name.build.txt"
   local built=$(date +%s.%N)
   local line
-  line=$(.venv/bin/python scripts/example3.py "$out/$name.fmu" "${run[@]}" | grep "^| $name.fmu")
+  line=$(.venv/bin/python scripts/example3.py "$out/$name.fmu" --comm-step 2e-5 "${run[@]}" | grep "^| $name.fmu")
   printf '| %s | %.1f %s\n' "$name" "$(echo "$built - $start" | bc)" "${line#| $name.fmu }"
 }
-echo "| setting | offline build (s) | wall (s) | real-time factor | µs per doStep | memory (MiB) | ω₂ end (rad/s) | DTE mean (µm) | DTE p-p (µm) |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| setting | offline build (s) | wall (s) | real-time factor | µs per doStep | memory (MiB) | ω₂ end (rad/s) | DTE mean (µm) | DTE RMS (µm) | DTE p-p (µm) |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 row default
 row modes10 --modes 10
 row modes40 --modes 40

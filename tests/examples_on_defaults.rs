@@ -1,6 +1,6 @@
 //! Every example spec runs on its own defaults (issue 12, item 1): a newcomer's first command on
 //! any example must not be an error. The statics with `fmu-build ste`'s defaults (PMOR-Hertz,
-//! h = 3 mm, p_en = 0.99, Weber) on the spec's own mesh, at the heaviest load of the paper's
+//! h = 3 mm, p_en = `rom::svd::DEFAULT_P_EN`, Weber) on the spec's own mesh, at the heaviest load of the paper's
 //! Table 4 / Table 7, three positions over a pitch. Regression guard (what it checks is that the
 //! spec's mesh carries its contact at the default depth, and that the answer is a number in the
 //! range the committed results show).
@@ -13,7 +13,7 @@ fn run_on_defaults(file: &str, torque_nm: f64) -> f64 {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
     let spec = PairSpec::load(&path).unwrap();
     let pair = GearPair::from_spec(&spec).unwrap();
-    let method = Method::PmorHertz { depth_m: 3e-3, p_en: 0.99, law: ApproachLaw::Weber };
+    let method = Method::PmorHertz { depth_m: 3e-3, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
     let reduced = ReducedPair::build(&pair, &spec.mesh, method, |_, _| {})
         .unwrap_or_else(|e| panic!("{file} on its defaults: {e}"));
     let cases = reduced.sweep(&[torque_nm], 3, 1.0);

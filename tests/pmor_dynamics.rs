@@ -331,7 +331,7 @@ fn contact_angle_forces_are_the_gradient_of_the_contact_potential() {
     let pitch2 = 2.0 * PI / m.pair.gear2.teeth as f64;
     let w2 = 50.0;
     let mut s = m.initial_state([mean_static / rb[0], 0.0], [w2 * rb[1] / rb[0], w2]);
-    let (mut checked, mut worst) = (0, 0.0_f64);
+    let (mut checked, mut kinks, mut worst) = (0, 0, 0.0_f64);
     let mut k = 0;
     while s.theta[1] < pitch2 {
         let brake = -torque * rb[1] / rb[0] - 20.0 * (s.omega[1] - w2);
@@ -345,29 +345,40 @@ fn contact_angle_forces_are_the_gradient_of_the_contact_potential() {
             continue; // the start's rebound
         }
         for i in 0..2 {
-            let h = 1e-7;
-            let mut up = s.clone();
-            up.theta[i] += h;
-            let mut down = s.clone();
-            down.theta[i] -= h;
-            let slope =
-                (dynamics.outputs(&up).unwrap().contact_j - dynamics.outputs(&down).unwrap().contact_j) / (2.0 * h);
-            let force = at.contact.force[i][0];
+            let slope = |h: f64| {
+                let mut up = s.clone();
+                up.theta[i] += h;
+                let mut down = s.clone();
+                down.theta[i] -= h;
+                (dynamics.outputs(&up).unwrap().contact_j - dynamics.outputs(&down).unwrap().contact_j) / (2.0 * h)
+            };
             // Scale: the mesh torque on the gear.
-            let error = (force + slope).abs() / (rb[i] * at.contact.normal_force_n);
+            let scale = rb[i] * at.contact.normal_force_n;
+            let (coarse, fine) = (slope(1e-7), slope(2.5e-8));
+            // W is only piecewise smooth: the flank field is bilinear between node rows, so its
+            // slope jumps where a contact point crosses a row. Where the two differences
+            // disagree the state sits on such a kink and has no gradient to compare.
+            if (coarse - fine).abs() > 1e-6 * scale {
+                kinks += 1;
+                continue;
+            }
+            let force = at.contact.force[i][0];
+            let error = (force + coarse).abs() / scale;
             worst = worst.max(error);
             assert!(
                 error < 1e-5,
                 "gear {} at θ₂ = {:.5}: F_θ {force:.6} N·m, −∂W/∂θ {:.6} N·m",
                 i + 1,
                 s.theta[1],
-                -slope
+                -coarse
             );
             checked += 1;
         }
     }
-    eprintln!("angle forces against −∂W/∂θ: {checked} checks, worst {worst:.2e} of the mesh torque");
-    assert!(checked > 40);
+    eprintln!(
+        "angle forces against −∂W/∂θ: {checked} checks, worst {worst:.2e} of the mesh torque; {kinks} states on a kink of W skipped"
+    );
+    assert!(checked > 40 && kinks * 10 < checked);
 }
 
 /// Linear dynamics (evidence: the linearized ROM's eigenvalues against a time run of the full

@@ -58,8 +58,9 @@ struct RomOptions {
     /// Depth h (mm) of the partial models and of the Hertz approach.
     #[arg(long, default_value_t = 3.0)]
     depth_mm: f64,
-    /// Share of the deformation energy the SVD of the attachment modes keeps.
-    #[arg(long, default_value_t = 0.9999)]
+    /// Share of the deformation energy the SVD of the attachment modes keeps (default: chosen by
+    /// measured accuracy, `rom::svd::DEFAULT_P_EN`).
+    #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN)]
     p_en: f64,
     /// Interpolation of the shapes in the gear angle.
     #[arg(long, value_enum, default_value = "catmull-rom")]
@@ -142,8 +143,9 @@ enum Command {
         /// PMOR-Hertz: depth h (mm) of the partial model and of the Hertz approach.
         #[arg(long, default_value_t = 3.0)]
         depth_mm: f64,
-        /// PMOR-Hertz: share of the deformation energy the SVD keeps (Algorithm 1).
-        #[arg(long, default_value_t = 0.99)]
+        /// PMOR-Hertz: share of the deformation energy the SVD keeps (Algorithm 1; default:
+        /// chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`, not the paper's 0.99).
+        #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN)]
         p_en: f64,
         /// PMOR-Hertz: the paper's Eq. 20 (made consistent) instead of Weber's approach.
         #[arg(long)]

@@ -50,7 +50,7 @@ impl Default for DynamicBuildOptions {
             angles: 40,
             rom_torques_nm: vec![250.0],
             depth_m: 3e-3,
-            p_en: 0.9999,
+            p_en: crate::rom::svd::DEFAULT_P_EN,
             law: ApproachLaw::Weber,
             interpolation: Interpolation::CatmullRom,
             modal_damping_ratio: 0.01,
