@@ -26,8 +26,10 @@ pub struct LinearizedPair {
     pub coordinates: usize,
 }
 
-/// Scale of each coordinate of q for the differences: angles by a micro-radian, η by the size
-/// the state has (at least that of a micrometre-sized shape amplitude).
+/// Scale of each coordinate of q for the differences (a step is `DIFFERENCE` of it): the
+/// coordinate's own size, at least 10⁻³ in its unit (rad for angles; for η, modal amplitudes of
+/// unit modal mass, 10⁻³ is far above a loaded gear's, so the step stays a small perturbation
+/// above round-off).
 fn scales(q: &[f64]) -> Vec<f64> {
     q.iter().map(|v| v.abs().max(1e-3)).collect()
 }
