@@ -462,3 +462,32 @@ fn torque_step_rings_at_the_linearized_mesh_mode() {
     assert!((peak / mesh_mode.0 - 1.0).abs() < 0.02);
     assert!(mesh_mode.1 > 0.5 * total, "one mode must carry the DTE for the comparison to mean anything");
 }
+
+/// Validity (issue 12, item 4, the dynamics' side): the pair pressed ever deeper at rest (η = 0,
+/// all the approach in the contact) is refused by the half-width rule (b ≤ h/4,
+/// `contact::hertz::MAX_HALF_WIDTH_OVER_DEPTH`) — before the law's own monotone range ends
+/// (b ≈ 0.59 h) — with a message that names the rule; a doStep there returns an error.
+#[test]
+fn contact_beyond_the_half_width_rule_is_an_error() {
+    let f = fixture();
+    let m = &f.model;
+    let rb = base_radii(m);
+    let dynamics = PmorDynamics::new(m, &f.place, m.damping(0.01, 0.05), [0.0; 2]);
+    let theta2 = 0.3 * m.gears[1].pitch_rad();
+    let mut te_m = 10e-6;
+    loop {
+        let s = m.initial_state([(rb[1] * theta2 + te_m) / rb[0], theta2], [0.0; 2]);
+        match dynamics.outputs(&s) {
+            Ok(out) => {
+                assert!(out.contact.normal_force_n > 0.0);
+                te_m += 10e-6;
+            }
+            Err(message) => {
+                eprintln!("refused at an approach of {:.0} µm: {message}", te_m * 1e6);
+                assert!(message.contains("half-width") && message.contains("0.25"), "{message}");
+                break;
+            }
+        }
+        assert!(te_m < 5e-3, "never refused");
+    }
+}

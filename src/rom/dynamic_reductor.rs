@@ -115,8 +115,10 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
         [0.0; 2],
     );
     let torque = STEP_LOAD_FACTOR * options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    // The rigid guess: the mesh stiffness of steel spur gears is of order 10 N/(mm·µm).
-    let guess = torque / model.pair.gear1.base_radius_m / (1e10 * model.pair.face_width_m);
+    // Start at a tenth of the STE a mesh stiffness of 10 N/(mm·µm) would give: with η = 0 the
+    // whole approach sits in the Hertz contact, so the Newton iterates come from the light side
+    // and stay inside the contact law's range (b ≤ h/4).
+    let guess = torque / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
     let mut shortest: Option<(f64, Vec<f64>)> = None;
     for quarter in 0..4 {
         let theta2 = (quarter as f64 + 0.5) / 4.0 * model.gears[1].pitch_rad();

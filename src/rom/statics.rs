@@ -408,6 +408,14 @@ impl<'a> StaticModel<'a> {
             }
             te = te_ref + y[0];
             if (te - last_te).abs() <= 1e-6 * te.abs() {
+                // The converged contact must lie in the law's range (not the Newton iterates).
+                for e in &elements {
+                    if let (Law::Hertz { contact, .. }, true) = (&e.law, e.result.force_n > 0.0) {
+                        contact.check_half_width(e.result.force_n).map_err(|m| {
+                            format!("at θ₂ = {theta2} rad, T₁ = {torque_nm} N·m, tooth pair {}: {m}", e.result.pair)
+                        })?;
+                    }
+                }
                 let loaded: Vec<ElementResult> =
                     elements.iter().map(|e| e.result).filter(|r| r.force_n > 0.0).collect();
                 let mut pairs: Vec<i64> = loaded.iter().map(|e| e.pair).collect();

@@ -198,6 +198,7 @@ pub fn contact_loads(
             if force <= 0.0 {
                 continue;
             }
+            law.check_half_width(force).map_err(|m| format!("tooth pair {j}, section {s}: {m}"))?;
             // Generalized forces on η: the Hertz band, pushing into each tooth.
             let beta = law.half_width(force);
             for i in 0..2 {
