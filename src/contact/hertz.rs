@@ -155,12 +155,7 @@ impl LineContact {
         if approach_m <= 0.0 {
             return Ok(0.0);
         }
-        let beta = self.half_width(1.0);
-        let (mut c_sum, mut s_sum) = (0.0, 0.0);
-        for (a, k, c) in self.terms() {
-            c_sum += a * ((k / beta).ln() - c);
-            s_sum += a;
-        }
+        let (c_sum, s_sum) = self.log_form();
         let x_star = 2.0 * c_sum / s_sum - 1.0;
         let approach_max = 0.5 * s_sum * x_star.exp();
         if !(approach_m < approach_max) {
@@ -189,17 +184,23 @@ impl LineContact {
         Err(format!("the Hertz inverse did not converge at approach {approach_m:.3e} m"))
     }
 
-    /// The largest force for which δ(P) is still increasing. With b = β√P the compliance is
-    /// Σ aᵢ(ln(kᵢ/β) − cᵢ − ½) − ½ ln P · Σ aᵢ, which vanishes at
-    /// ln P* = 2 Σ aᵢ(ln(kᵢ/β) − cᵢ − ½) / Σ aᵢ.
-    pub fn max_valid_force(&self) -> f64 {
+    /// (C, S) of the law written as δ = P·(C − ½S·ln P): b = β√P, S = Σ aᵢ,
+    /// C = Σ aᵢ(ln(kᵢ/β) − cᵢ).
+    fn log_form(&self) -> (f64, f64) {
         let beta = self.half_width(1.0);
-        let (mut weighted, mut total) = (0.0, 0.0);
+        let (mut c_sum, mut s_sum) = (0.0, 0.0);
         for (a, k, c) in self.terms() {
-            weighted += a * ((k / beta).ln() - c - 0.5);
-            total += a;
+            c_sum += a * ((k / beta).ln() - c);
+            s_sum += a;
         }
-        (2.0 * weighted / total).exp()
+        (c_sum, s_sum)
+    }
+
+    /// The largest force for which δ(P) is still increasing: dδ/dP = C − ½S − ½S·ln P vanishes at
+    /// ln P* = 2C/S − 1.
+    pub fn max_valid_force(&self) -> f64 {
+        let (c_sum, s_sum) = self.log_form();
+        (2.0 * c_sum / s_sum - 1.0).exp()
     }
 }
 

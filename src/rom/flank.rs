@@ -113,32 +113,27 @@ impl FlankGrid {
 
     /// Shares of the point (radius r, mid-plane of axial section `section`) of `tooth`'s flank.
     pub fn point_shares(&self, tooth: usize, r: f64, section: usize) -> Option<Shares> {
-        let slot = self.tooth_slot(tooth)?;
-        let (row, t) = self.row_of(r);
-        let mut out = Vec::with_capacity(4);
-        for (dr, wr) in [(0, 1.0 - t), (1, t)] {
-            for dl in 0..2 {
-                out.push((self.index(slot, row + dr, section + dl), 0.5 * wr));
-            }
-        }
-        Some(out)
+        self.point_shares_and_slopes(tooth, r, section).map(|(shares, _)| shares)
     }
 
-    /// d/dr of [`FlankGrid::point_shares`]: the same nodes, the profile weights' slopes ∓1/Δr
-    /// (zero where the radius is clamped to the flank's extent, as the shares are constant there).
-    pub fn point_share_slopes(&self, tooth: usize, r: f64, section: usize) -> Option<Shares> {
+    /// [`FlankGrid::point_shares`] and their d/dr: the same nodes, the profile weights' slopes
+    /// ∓1/Δr (zero where the radius is clamped to the flank's extent, as the shares are constant
+    /// there).
+    pub fn point_shares_and_slopes(&self, tooth: usize, r: f64, section: usize) -> Option<(Shares, Shares)> {
         let slot = self.tooth_slot(tooth)?;
         let rows = &self.row_radius_m;
-        let (row, _) = self.row_of(r);
+        let (row, t) = self.row_of(r);
         let inside = r > rows[0] && r < rows[rows.len() - 1];
         let slope = if inside { 1.0 / (rows[row + 1] - rows[row]) } else { 0.0 };
-        let mut out = Vec::with_capacity(4);
-        for (dr, wr) in [(0, -slope), (1, slope)] {
+        let (mut shares, mut slopes) = (Vec::with_capacity(4), Vec::with_capacity(4));
+        for (dr, wr, sr) in [(0, 1.0 - t, -slope), (1, t, slope)] {
             for dl in 0..2 {
-                out.push((self.index(slot, row + dr, section + dl), 0.5 * wr));
+                let node = self.index(slot, row + dr, section + dl);
+                shares.push((node, 0.5 * wr));
+                slopes.push((node, 0.5 * sr));
             }
         }
-        Some(out)
+        Some((shares, slopes))
     }
 
     /// Shares of the point at radius r on node layer `layer` of `tooth`'s flank.

@@ -73,9 +73,9 @@ fn elastic_approach(
     let g = &model.gears[i];
     let z = g.teeth as i64;
     let tooth = (c.teeth[i] as i64 + pose.anchor).rem_euclid(z) as usize;
-    let outside = || format!("contact on reference tooth {tooth} of gear {}: outside the stored flank rows", i + 1);
-    let shares = g.flank.point_shares(tooth, c.radius_m[i], c.section).ok_or_else(outside)?;
-    let slopes = g.flank.point_share_slopes(tooth, c.radius_m[i], c.section).ok_or_else(outside)?;
+    let (shares, slopes) = g.flank.point_shares_and_slopes(tooth, c.radius_m[i], c.section).ok_or_else(|| {
+        format!("contact on reference tooth {tooth} of gear {}: outside the stored flank rows", i + 1)
+    })?;
     // n = m/|m| with m = Σ w·nₖ; dn/dr = (m' − n(n·m'))/|m|.
     let (mut m, mut dm) = ([0.0; 3], [0.0; 3]);
     let (mut u, mut du_dr, mut du_dtheta) = ([0.0; 3], [0.0; 3], [0.0; 3]);
