@@ -24,6 +24,48 @@ pub struct ReducedGear {
     pub flank_modes: Mat<f64>,
     /// Reduced stiffness (n_r × n_r).
     pub stiffness: Mat<f64>,
+    /// What the reduced coordinates are; it decides how a flank load condenses.
+    pub coordinates: Coordinates,
+}
+
+/// What a gear's reduced coordinates are. The static contact problem is condensed onto the
+/// contact forces through the response q = K_r⁻¹·b of the reduced load b of a flank load; both
+/// reductions make that response free, for different reasons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Coordinates {
+    /// K_r = I (PMOR-Hertz's SVD basis scaled to unit stiffness, checked when it is built): the
+    /// response to a reduced load is the load itself.
+    UnitStiffness,
+    /// K_r = C, the normal flexibility of the loadable nodes (standard CMS, one attachment mode
+    /// per node): q are the nodal normal forces, and the response to unit forces along the node
+    /// normals, shared as w, is w.
+    NodalForces,
+}
+
+/// The reduced coordinates a flank load produces, K_r⁻¹·b: dense, or sparse where the
+/// coordinates are nodal forces.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LoadResponse {
+    Dense(Vec<f64>),
+    Sparse(Shares),
+}
+
+impl LoadResponse {
+    /// rowᵀ·q: how a gap row (`ReducedGear::projected_row`) sees the response.
+    pub fn dot(&self, row: &[f64]) -> f64 {
+        match self {
+            LoadResponse::Dense(q) => q.iter().zip(row).map(|(a, b)| a * b).sum(),
+            LoadResponse::Sparse(w) => w.iter().map(|&(k, v)| v * row[k]).sum(),
+        }
+    }
+
+    /// q += scale·response.
+    pub fn add_to(&self, scale: f64, q: &mut [f64]) {
+        match self {
+            LoadResponse::Dense(r) => q.iter_mut().zip(r).for_each(|(a, b)| *a += scale * b),
+            LoadResponse::Sparse(w) => w.iter().for_each(|&(k, v)| q[k] += scale * v),
+        }
+    }
 }
 
 /// Lifts reduced coordinates back to the free DOFs of the FE model.
@@ -70,6 +112,15 @@ impl ReducedGear {
             }
         }
         row
+    }
+
+    /// The reduced coordinates that unit forces along the node normals (inward), shared as
+    /// given, produce: K_r⁻¹ times [`ReducedGear::inward_load_row`].
+    pub fn load_response(&self, shares: &Shares) -> LoadResponse {
+        match self.coordinates {
+            Coordinates::UnitStiffness => LoadResponse::Dense(self.inward_load_row(shares)),
+            Coordinates::NodalForces => LoadResponse::Sparse(shares.clone()),
+        }
     }
 
     /// The reduced load of forces of unit total along each node's inward normal, shared as given.
@@ -126,11 +177,29 @@ pub fn pmor_hertz(
         }
     }
     let stiffness = super::svd::projected_stiffness(&model.stiffness, &basis);
+    // The condensed statics take K_r⁻¹ = I: hold the basis to it.
+    let off_identity = (0..stiffness.nrows())
+        .flat_map(|i| (0..stiffness.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| (stiffness[(i, j)] - if i == j { 1.0 } else { 0.0 }).abs())
+        .fold(0.0, f64::max);
+    if off_identity > UNIT_STIFFNESS_TOLERANCE {
+        return Err(format!(
+            "the scaled SVD basis is not stiffness-orthonormal: max |K_r − I| = {off_identity:.2e} > {UNIT_STIFFNESS_TOLERANCE:.0e}"
+        ));
+    }
     let report =
         CompressionReport { n_c: flank.len(), n_sv: c.n_sv, retained: c.retained, singular_values: c.singular_values };
     let flank_modes = flank_rows(&basis, &model.dofs, &flank);
-    Ok((ReducedGear { flank, flank_modes, stiffness }, Reconstructor { basis, dofs: model.dofs.clone() }, report))
+    Ok((
+        ReducedGear { flank, flank_modes, stiffness, coordinates: Coordinates::UnitStiffness },
+        Reconstructor { basis, dofs: model.dofs.clone() },
+        report,
+    ))
 }
+
+/// How far from the identity PMOR-Hertz's reduced stiffness may be (round-off of the SVD and the
+/// projection is ~1e-13): the statics solve with K_r⁻¹ = I, so this bounds their error.
+pub const UNIT_STIFFNESS_TOLERANCE: f64 = 1e-9;
 
 /// Standard CMS: ψ = K⁻¹F, one column per loadable node (a unit load along its inward normal).
 /// Then K_CMS = ψᵀKψ = Fᵀψ, read off the flank rows.
@@ -152,5 +221,6 @@ pub fn standard_cms(model: &ClampedGear, factor: &Cholesky, flank: FlankGrid) ->
         };
         0.5 * (f(a, b) + f(b, a))
     });
-    (ReducedGear { flank, flank_modes, stiffness }, Reconstructor { basis, dofs: model.dofs.clone() })
+    let reduced = ReducedGear { flank, flank_modes, stiffness, coordinates: Coordinates::NodalForces };
+    (reduced, Reconstructor { basis, dofs: model.dofs.clone() })
 }

@@ -5,19 +5,25 @@
 //! unknowns, α = α₀ + s·(r_b1θ₁ − ref) + g₁·q₁ + g₂·q₂, a force P(α) ≥ 0, and the reduced loads
 //! P·b₁, P·b₂ it puts on the gears. Equilibrium is
 //!   T₁/r_b1 = Σ s·P,    K_i·q_i = Σ P·b_i   (i = 1, 2),
-//! solved by Newton–Raphson with a backtracking line search. For PMOR-Hertz the elements are the
-//! axial sections of the tooth pairs, P(α) the inverse of the Hertz load–approach relation (the
-//! inner loop: a bracketed Newton per section) and b the Hertz pressure band integrated over the
-//! flank; for the penalty baseline they are flank nodes against the mating flank (node-to-surface,
-//! both passes) with P = k·max(α, 0).
+//! For PMOR-Hertz the elements are the axial sections of the tooth pairs, P(α) the inverse of the
+//! Hertz load–approach relation and b the Hertz pressure band integrated over the flank; for the
+//! penalty baseline they are flank nodes against the mating flank (node-to-surface, both passes)
+//! with P = k·max(α, 0).
+//!
+//! Two solvers, one answer: `condensed` (the default) eliminates q and iterates on the forces of
+//! the elements in contact only, the way loaded-tooth-contact codes do; `dense` is Newton on all
+//! 1 + n₁ + n₂ unknowns, kept as the reference it is tested against.
 //! The contact search is redone at the converged angle until the transmission error settles.
 
+mod condensed;
+mod dense;
+
+use super::flank::Shares;
 use super::reductor::ReducedGear;
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{ContactKind, PairPlacement, SectionContact};
 use crate::dynamics::iso6336;
 use crate::gear::GearPair;
-use nalgebra::{DMatrix, DVector};
 
 /// How the flanks push on each other.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,12 +96,18 @@ enum Law {
     Penalty { stiffness_n_per_m: f64 },
 }
 
+/// Names an element across contact searches: (tooth pair, section or node layer, pass, node).
+type ElementKey = (i64, usize, usize, usize);
+
 struct Element {
+    key: ElementKey,
     result: ElementResult,
     alpha0: f64,
     arm: f64,
     gap: [Vec<f64>; 2],
     load: [Vec<f64>; 2],
+    /// The nodal shares of `load` (unit forces along the node normals).
+    load_shares: [Shares; 2],
     law: Law,
 }
 
@@ -111,11 +123,6 @@ impl Element {
         }
     }
 }
-
-/// Relative residual at which Newton stops (torque balance over T₁/r_b1, the gears' balance
-/// over the size of their contact loads).
-const FORCE_TOLERANCE: f64 = 1e-9;
-const MAX_NEWTON: usize = 100;
 
 impl<'a> StaticModel<'a> {
     pub fn new(pair: &GearPair, gears: [&'a ReducedGear; 2], contact: ContactModel) -> Self {
@@ -158,6 +165,7 @@ impl<'a> StaticModel<'a> {
                 ];
                 let contact = c.line_contact(self.pair(), z[s + 1] - z[s], depth_m, law);
                 out.push(Element {
+                    key: (j, s, 2, 0),
                     result: ElementResult {
                         pair: j,
                         section: s,
@@ -170,8 +178,10 @@ impl<'a> StaticModel<'a> {
                     },
                     alpha0: c.rigid_penetration_m,
                     arm: c.arm_ratio,
+                    // A point load until the first force gives the band its width.
                     load: [gap[0].iter().map(|v| -v).collect(), gap[1].iter().map(|v| -v).collect()],
                     gap,
+                    load_shares: [s1, s2],
                     law: Law::Hertz { contact, geometry: c },
                 });
             }
@@ -179,22 +189,20 @@ impl<'a> StaticModel<'a> {
         out
     }
 
-    /// The Hertz pressure band of a section at force P, as reduced loads.
-    fn hertz_band_loads(&self, geometry: &SectionContact, half_width_m: f64) -> Option<[Vec<f64>; 2]> {
+    /// The Hertz pressure band of a section at force P: its nodal shares, per gear.
+    fn hertz_band_shares(&self, geometry: &SectionContact, half_width_m: f64) -> Option<[Shares; 2]> {
         let p = self.pair();
         let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
-        let mut loads = [Vec::new(), Vec::new()];
-        for i in 0..2 {
-            let shares = self.gears[i].flank.band_shares(
+        let band = |i: usize| {
+            self.gears[i].flank.band_shares(
                 geometry.teeth[i],
                 geometry.radius_m[i],
                 half_width_m,
                 base[i],
                 geometry.section,
-            )?;
-            loads[i] = self.gears[i].inward_load_row(&shares);
-        }
-        Some(loads)
+            )
+        };
+        Some([band(0)?, band(1)?])
     }
 
     fn penalty_elements(&self, theta: [f64; 2], factor: f64) -> Vec<Element> {
@@ -241,13 +249,17 @@ impl<'a> StaticModel<'a> {
                     let slave_shares = vec![(k, 1.0)];
                     let mut gap = [Vec::new(), Vec::new()];
                     let mut load = [Vec::new(), Vec::new()];
+                    let mut load_shares = [Vec::new(), Vec::new()];
                     gap[slave] = self.gears[slave].projected_row(&slave_shares, normal);
                     load[slave] = self.gears[slave].inward_load_row(&slave_shares);
                     let n_master = self.gears[master].flank.normal(&master_shares);
                     gap[master] = self.gears[master].projected_row(&master_shares, n_master);
                     load[master] = self.gears[master].inward_load_row(&master_shares);
+                    load_shares[slave] = slave_shares;
+                    load_shares[master] = master_shares;
                     let share = if layer == 0 || layer == layers.len() - 1 { 0.5 } else { 1.0 };
                     out.push(Element {
+                        key: (j, layer, slave, k),
                         result: ElementResult {
                             pair: j,
                             section: layer,
@@ -262,6 +274,7 @@ impl<'a> StaticModel<'a> {
                         arm,
                         gap,
                         load,
+                        load_shares,
                         law: Law::Penalty { stiffness_n_per_m: 0.5 * factor * c_gamma * share * dz },
                     });
                 }
@@ -270,156 +283,52 @@ impl<'a> StaticModel<'a> {
         out
     }
 
-    /// Static equilibrium at θ₂ under torque T₁ (N·m, driving).
+    /// Static equilibrium at θ₂ under torque T₁ (N·m, driving), by the condensed solver.
     pub fn solve(&self, theta2: f64, torque_nm: f64) -> Result<StaticCase, String> {
+        self.solve_with(theta2, torque_nm, Solver::Condensed)
+    }
+
+    /// Static equilibrium by the chosen solver. The contact search is redone at the converged
+    /// angle until the transmission error settles; each search solves the equilibrium of the
+    /// elements found there.
+    pub fn solve_with(&self, theta2: f64, torque_nm: f64, solver: Solver) -> Result<StaticCase, String> {
         let p = self.pair();
         let (rb1, rb2) = (p.gear1.base_radius_m, p.gear2.base_radius_m);
         if !(torque_nm.is_finite() && torque_nm > 0.0) {
             return Err(format!("torque must be positive and finite, got {torque_nm} N·m"));
         }
+        let at = || format!("at θ₂ = {theta2} rad, T₁ = {torque_nm} N·m");
         let target = torque_nm / rb1;
-        let (n1, n2) = (self.gears[0].size(), self.gears[1].size());
-        let n = 1 + n1 + n2;
         let mut te = 0.0;
-        let mut y = DVector::<f64>::zeros(n);
+        let mut warm = WarmStart::default();
         let mut iterations = 0;
         let mut last_te = f64::NAN;
-        for _search in 0..5 {
+        for _search in 0..MAX_CONTACT_SEARCHES {
             let theta = [(rb2 * theta2 + te) / rb1, theta2];
             let mut elements = self.elements(theta);
             if elements.is_empty() {
                 return Err(format!("no tooth pair within reach at θ₂ = {theta2} rad"));
             }
             let te_ref = te;
-            if iterations == 0 {
-                te = rigid_guess(&elements, target)?;
-                y[0] = te - te_ref;
-            } else {
-                y[0] = 0.0;
+            let equilibrium = match solver {
+                Solver::Condensed => self.condensed_equilibrium(&mut elements, te_ref, target, &mut warm),
+                Solver::Dense => self.dense_equilibrium(&mut elements, te_ref, target, &mut warm),
             }
-            // Residual, its scale (the size of the contact loads) and, if asked, the Jacobian.
-            type Evaluation = (DVector<f64>, f64, Option<DMatrix<f64>>);
-            let evaluate = |y: &DVector<f64>, elements: &mut Vec<Element>, jac: bool| -> Result<Evaluation, String> {
-                let q = [&y.as_slice()[1..1 + n1], &y.as_slice()[1 + n1..]];
-                let mut load_norm = 0.0;
-                let mut r = DVector::zeros(n);
-                r[0] = target;
-                for i in 0..2 {
-                    let k = &self.gears[i].stiffness;
-                    let off = if i == 0 { 1 } else { 1 + n1 };
-                    let m = k.nrows();
-                    for a in 0..m {
-                        r[off + a] = (0..m).map(|b| k[(a, b)] * q[i][b]).sum();
-                    }
-                }
-                let mut jm = if jac { Some(DMatrix::zeros(n, n)) } else { None };
-                if let Some(j) = jm.as_mut() {
-                    for i in 0..2 {
-                        let k = &self.gears[i].stiffness;
-                        let off = if i == 0 { 1 } else { 1 + n1 };
-                        for a in 0..k.nrows() {
-                            for b in 0..k.ncols() {
-                                j[(off + a, off + b)] = k[(a, b)];
-                            }
-                        }
-                    }
-                }
-                for e in elements.iter_mut() {
-                    let alpha = e.alpha0 + e.arm * y[0] + dot(&e.gap[0], q[0]) + dot(&e.gap[1], q[1]);
-                    let (force, slope) = e.force(alpha)?;
-                    e.result.force_n = force;
-                    e.result.penetration_m = alpha;
-                    if let Law::Hertz { contact, geometry } = &e.law {
-                        if force > 0.0 {
-                            let beta = contact.half_width(force);
-                            e.result.half_width_m = beta;
-                            if let Some(loads) = self.hertz_band_loads(geometry, beta) {
-                                e.load = loads;
-                            }
-                        }
-                    }
-                    if force == 0.0 && slope == 0.0 {
-                        continue;
-                    }
-                    r[0] -= force * e.arm;
-                    for i in 0..2 {
-                        let off = if i == 0 { 1 } else { 1 + n1 };
-                        for (a, b) in e.load[i].iter().enumerate() {
-                            r[off + a] -= force * b;
-                            load_norm += (force * b).powi(2);
-                        }
-                    }
-                    if let Some(j) = jm.as_mut() {
-                        // ∂/∂y of (−s·P, −P·b): the gradient of α is (s, g₁, g₂).
-                        let grad: Vec<(usize, f64)> = std::iter::once((0, e.arm))
-                            .chain(e.gap[0].iter().enumerate().map(|(a, v)| (1 + a, *v)))
-                            .chain(e.gap[1].iter().enumerate().map(|(a, v)| (1 + n1 + a, *v)))
-                            .collect();
-                        let rows: Vec<(usize, f64)> = std::iter::once((0, e.arm))
-                            .chain(e.load[0].iter().enumerate().map(|(a, v)| (1 + a, *v)))
-                            .chain(e.load[1].iter().enumerate().map(|(a, v)| (1 + n1 + a, *v)))
-                            .collect();
-                        for &(ra, va) in &rows {
-                            for &(cb, vb) in &grad {
-                                j[(ra, cb)] -= slope * va * vb;
-                            }
-                        }
-                    }
-                }
-                Ok((r, load_norm.sqrt(), jm))
-            };
-            let merit = |r: &DVector<f64>, scale: f64| {
-                (r[0] / target).powi(2) + r.rows(1, n - 1).norm_squared() / scale.max(f64::MIN_POSITIVE).powi(2)
-            };
-            let mut converged = false;
-            for _ in 0..MAX_NEWTON {
-                iterations += 1;
-                let (r, scale, j) = evaluate(&y, &mut elements, true)?;
-                let current = merit(&r, scale);
-                let j = j.expect("Jacobian requested");
-                let step = j.clone().lu().solve(&(-&r)).ok_or("singular Jacobian in the static contact solve")?;
-                let mut t = 1.0;
-                let mut accepted = false;
-                for _ in 0..40 {
-                    let trial = &y + &step * t;
-                    if let Ok((rt, st, _)) = evaluate(&trial, &mut elements, false) {
-                        if merit(&rt, st) < current || t < 1e-6 {
-                            y = trial;
-                            accepted = true;
-                            break;
-                        }
-                    }
-                    t *= 0.5;
-                }
-                if !accepted {
-                    return Err(format!("line search failed at θ₂ = {theta2} rad, T₁ = {torque_nm} N·m"));
-                }
-                let (r, scale, _) = evaluate(&y, &mut elements, false)?;
-                let small_step = (step[0] * t).abs() <= 1e-9 * (te_ref + y[0]).abs().max(1e-9);
-                if merit(&r, scale).sqrt() <= FORCE_TOLERANCE && small_step {
-                    converged = true;
-                    break;
-                }
-            }
-            if !converged {
-                return Err(format!(
-                    "static contact did not converge in {MAX_NEWTON} Newton iterations at θ₂ = {theta2} rad, T₁ = {torque_nm} N·m"
-                ));
-            }
-            te = te_ref + y[0];
+            .map_err(|m| format!("{m} {}", at()))?;
+            iterations += equilibrium.iterations;
+            te = te_ref + equilibrium.te_offset_m;
             if (te - last_te).abs() <= 1e-6 * te.abs() {
-                // The converged contact must lie in the law's range (not the Newton iterates).
+                // The converged contact must lie in the law's range (not the iterates).
                 for e in &elements {
                     if let (Law::Hertz { contact, .. }, true) = (&e.law, e.result.force_n > 0.0) {
-                        contact.check_half_width(e.result.force_n).map_err(|m| {
-                            format!("at θ₂ = {theta2} rad, T₁ = {torque_nm} N·m, tooth pair {}: {m}", e.result.pair)
-                        })?;
+                        contact
+                            .check_half_width(e.result.force_n)
+                            .map_err(|m| format!("{}, tooth pair {}: {m}", at(), e.result.pair))?;
                     }
                 }
                 let loaded: Vec<ElementResult> =
                     elements.iter().map(|e| e.result).filter(|r| r.force_n > 0.0).collect();
                 let mut pairs: Vec<i64> = loaded.iter().map(|e| e.pair).collect();
-                pairs.dedup();
                 pairs.sort();
                 pairs.dedup();
                 return Ok(StaticCase {
@@ -429,15 +338,43 @@ impl<'a> StaticModel<'a> {
                     mesh_force_n: loaded.iter().map(|e| e.force_n).sum(),
                     pairs_in_contact: pairs.len(),
                     elements: loaded,
-                    reduced: [y.as_slice()[1..1 + n1].to_vec(), y.as_slice()[1 + n1..].to_vec()],
+                    reduced: equilibrium.reduced,
                     newton_iterations: iterations,
                 });
             }
             last_te = te;
-            // Keep q; re-linearize the contact search at the new angle.
         }
-        Err(format!("the contact search did not settle at θ₂ = {theta2} rad, T₁ = {torque_nm} N·m"))
+        Err(format!("the contact search did not settle in {MAX_CONTACT_SEARCHES} searches {}", at()))
     }
+}
+
+/// Which algorithm solves the equilibrium of one contact search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Solver {
+    /// Condensed onto the contact forces, active set + modified Newton (`condensed.rs`): the
+    /// default, and the way loaded-tooth-contact codes solve it.
+    Condensed,
+    /// Newton on every reduced coordinate with a dense LU (`dense.rs`): the reference the
+    /// condensed solver is tested against.
+    Dense,
+}
+
+/// Contact searches before the solve gives up.
+const MAX_CONTACT_SEARCHES: usize = 5;
+
+/// The solution of one contact search: r_b1θ₁ − te_ref, both gears' reduced coordinates and the
+/// iterations it took (the elements hold their forces).
+struct Equilibrium {
+    te_offset_m: f64,
+    reduced: [Vec<f64>; 2],
+    iterations: usize,
+}
+
+/// What a contact search hands the next: the reduced coordinates and the element forces.
+#[derive(Default)]
+struct WarmStart {
+    reduced: Option<[Vec<f64>; 2]>,
+    forces: std::collections::HashMap<ElementKey, f64>,
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
