@@ -23,7 +23,7 @@ fn pair(file: &str) -> (GearPair, PairSpec) {
 /// force of every tooth pair and the reduced coordinates (the global contact shapes of the
 /// dynamics). Returns the per-case times (dense, condensed) in seconds.
 fn compare(reduced: &ReducedPair, torques_nm: &[f64], angles: usize) -> (f64, f64) {
-    let model = reduced.static_model();
+    let model = reduced.static_model().unwrap();
     let pitch = 2.0 * std::f64::consts::PI / reduced.pair.gear2.teeth as f64;
     let (mut dense_s, mut condensed_s, mut cases) = (0.0, 0.0, 0);
     let mut worst = [0.0_f64; 3];

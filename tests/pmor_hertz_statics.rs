@@ -60,8 +60,7 @@ fn reduce(p: &GearPair) -> ([ReducedGear; 2], [ReducedGear; 2]) {
 fn spur_static_transmission_error_against_iso_kinematics_and_the_penalty_baseline() {
     let p = spur();
     let (hertz, cms) = reduce(&p);
-    let model =
-        StaticModel::new(&p, [&hertz[0], &hertz[1]], ContactModel::Hertz { law: ApproachLaw::Weber, depth_m: 3e-3 });
+    let model = StaticModel::new(&p, [&hertz[0], &hertz[1]], ContactModel::Hertz { law: ApproachLaw::Weber }).unwrap();
     let pitch = 2.0 * PI / p.gear2.teeth as f64;
     let angles = 24;
     let sweep = |model: &StaticModel, torque: f64| -> Vec<(f64, usize)> {
@@ -114,7 +113,7 @@ fn spur_static_transmission_error_against_iso_kinematics_and_the_penalty_baselin
     assert!(single_share[1] < single_share[0], "tip contact under load must shorten single contact");
 
     // The penalty baseline on the same mesh (see the header for why its STE differs here).
-    let baseline = StaticModel::new(&p, [&cms[0], &cms[1]], ContactModel::Penalty { factor: 100.0 });
+    let baseline = StaticModel::new(&p, [&cms[0], &cms[1]], ContactModel::Penalty { factor: 100.0 }).unwrap();
     let torque = 392.0 * b_mm * p.gear1.base_radius_m;
     let theta2 = 0.5 * pitch;
     let (a, b) = (model.solve(theta2, torque).unwrap(), baseline.solve(theta2, torque).unwrap());

@@ -83,3 +83,18 @@ fn non_physical_material_and_sizes() {
     assert!(refused(&edit("face_width_mm = 15.0", "face_width_mm = -15.0")).contains("mounting.face_width_mm"));
     assert!(refused(&edit("bore_radius_mm = 20.0", "bore_radius_mm = 60.0")).contains("gear1.bore_radius_mm"));
 }
+
+#[test]
+fn tip_edge_radius_must_fit_on_the_tip_land() {
+    let spec = |v: &str| edit("bore_radius_mm = 25.0", &format!("bore_radius_mm = 25.0\ntip_edge_radius_mm = {v}"));
+    let message = refused(&spec("2.5"));
+    assert!(message.contains("gear2.tip_edge_radius_mm") && message.contains("half the tip land"), "{message}");
+    assert!(refused(&spec("0.0")).contains("gear2.tip_edge_radius_mm"));
+    let pair = GearPair::from_spec(&PairSpec::from_toml(&spec("0.3")).unwrap()).unwrap();
+    assert_eq!(pair.gear2.tip_edge_radius_m, 0.3e-3);
+    // The default: 0.1 × m_n.
+    assert!(
+        (GearPair::from_spec(&PairSpec::from_toml(SPUR).unwrap()).unwrap().gear1.tip_edge_radius_m - 0.6e-3).abs()
+            < 1e-15
+    );
+}

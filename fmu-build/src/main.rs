@@ -56,7 +56,7 @@ struct RomOptions {
     #[arg(long, value_delimiter = ',', default_value = "250")]
     rom_torques_nm: Vec<f64>,
     /// Depth h (mm) of the partial models and of the Hertz approach.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = gearfmu::rom::reductor::DEFAULT_CONTACT_DEPTH_M * 1e3)]
     depth_mm: f64,
     /// Share of the deformation energy the SVD of the attachment modes keeps (default: chosen by
     /// measured accuracy, `rom::svd::DEFAULT_P_EN`).
@@ -141,7 +141,7 @@ enum Command {
         #[arg(long, value_enum, default_value = "pmor-hertz")]
         method: StaticMethod,
         /// PMOR-Hertz: depth h (mm) of the partial model and of the Hertz approach.
-        #[arg(long, default_value_t = 3.0)]
+        #[arg(long, default_value_t = gearfmu::rom::reductor::DEFAULT_CONTACT_DEPTH_M * 1e3)]
         depth_mm: f64,
         /// PMOR-Hertz: share of the deformation energy the SVD keeps (Algorithm 1; default:
         /// chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`, not the paper's 0.99).

@@ -49,6 +49,11 @@ pub enum ApproachLaw {
 /// h/10 at h = 3 mm; 100 × Table 4's torque reaches h/2 and is refused.
 pub const MAX_HALF_WIDTH_OVER_DEPTH: f64 = 0.25;
 
+/// The same fraction of the smaller radius of curvature: Hertz's solution takes each body as a
+/// half-space near the band, which needs b ≪ ρ. It binds at tip edges (`Gear::tip_edge_radius_m`),
+/// never on the flanks at the paper's loads (ρ ≥ 5 mm there, b ≤ 0.3 mm).
+pub const MAX_HALF_WIDTH_OVER_RADIUS: f64 = 0.25;
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineContact {
     pub length_m: f64,
@@ -128,10 +133,19 @@ impl LineContact {
     }
 
     /// `Err` naming the rule and the values when the band under P is wider than
-    /// `MAX_HALF_WIDTH_OVER_DEPTH` × h: a load beyond the validity of the approach law.
+    /// `MAX_HALF_WIDTH_OVER_DEPTH` × h, or than `MAX_HALF_WIDTH_OVER_RADIUS` × the smaller radius
+    /// of curvature: a load beyond the validity of the approach law.
     pub fn check_half_width(&self, force_n: f64) -> Result<(), String> {
         let depth = self.bodies[0].reference_depth_m.min(self.bodies[1].reference_depth_m);
+        let radius = self.bodies[0].radius_of_curvature_m.min(self.bodies[1].radius_of_curvature_m);
         let b = self.half_width(force_n);
+        if b > MAX_HALF_WIDTH_OVER_RADIUS * radius {
+            return Err(format!(
+                "the Hertz half-width b = {:.4} mm under {force_n:.4e} N exceeds {MAX_HALF_WIDTH_OVER_RADIUS} × the smaller radius of curvature ρ = {:.4} mm: the load is beyond the validity of the contact law (it treats both bodies as half-spaces, b ≪ ρ); lower the load, or for a tip edge give its real edge radius",
+                b * 1e3,
+                radius * 1e3
+            ));
+        }
         if b > MAX_HALF_WIDTH_OVER_DEPTH * depth {
             return Err(format!(
                 "the Hertz half-width b = {:.3} mm under {force_n:.4e} N exceeds {MAX_HALF_WIDTH_OVER_DEPTH} × the depth h = {:.3} mm: the load is beyond the validity of the contact law (it needs b ≪ h); lower the load or raise h",
@@ -206,7 +220,8 @@ impl LineContact {
 
 /// A contact in series with a linear spring (the rest of the structure): the total approach is
 /// δ = P·c + δ_H(P). Returns P for a given δ by Newton's method inside a shrinking bracket;
-/// zero for δ ≤ 0. `Err` if δ lies beyond the valid range of the Hertz relation.
+/// zero for δ ≤ 0. `Err` if δ lies beyond the valid range of the Hertz relation, or if the
+/// iteration reaches its cap without closing the bracket.
 pub fn series_force(contact: &LineContact, structural_compliance: f64, approach_m: f64) -> Result<f64, String> {
     if approach_m <= 0.0 {
         return Ok(0.0);
@@ -222,7 +237,7 @@ pub fn series_force(contact: &LineContact, structural_compliance: f64, approach_
     let (mut lo, mut hi) = (0.0, p_max);
     let mut p = approach_m / (structural_compliance + contact.compliance(p_max).max(0.0)).max(1e-300);
     p = p.clamp(lo, hi);
-    for _ in 0..100 {
+    for _ in 0..SERIES_FORCE_ITERATIONS {
         let residual = total(p) - approach_m;
         if residual > 0.0 {
             hi = p
@@ -239,8 +254,15 @@ pub fn series_force(contact: &LineContact, structural_compliance: f64, approach_
         }
         p = next;
     }
-    Ok(p)
+    Err(format!(
+        "the series contact's force iteration hit its cap of {SERIES_FORCE_ITERATIONS} at approach {approach_m:.3e} m \
+         (bracket [{lo:.6e}, {hi:.6e}] N not closed to 1e-14)"
+    ))
 }
+
+/// The cap of `series_force`'s safeguarded Newton: bisection alone closes the bracket from the
+/// valid range to 1e-14 in under 50 halvings, so reaching it means something is wrong.
+pub const SERIES_FORCE_ITERATIONS: usize = 100;
 
 #[cfg(test)]
 mod tests {

@@ -256,10 +256,8 @@ impl PairPlacement {
                 radius_m: [r, g2.tip_radius_m],
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, tip2),
                 arm_ratio: cos_bb,
-                curvature_radius_m: [
-                    (r * r - g1.base_radius_m.powi(2)).sqrt(),
-                    (g2.tip_radius_m.powi(2) - g2.base_radius_m.powi(2)).sqrt(),
-                ],
+                // The corner is gear 2's rounded tip edge, not its involute.
+                curvature_radius_m: [(r * r - g1.base_radius_m.powi(2)).sqrt(), g2.tip_edge_radius_m],
             });
         }
         // Gear 1's tip corner on gear 2's flank.
@@ -276,10 +274,7 @@ impl PairPlacement {
                 radius_m: [g1.tip_radius_m, r],
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(1, j, z, tip1),
                 arm_ratio: cos_bb * self.arm_on_gear1_of_gear2_normal(w1, theta[1], j, z) / g1.base_radius_m,
-                curvature_radius_m: [
-                    (g1.tip_radius_m.powi(2) - g1.base_radius_m.powi(2)).sqrt(),
-                    (r * r - g2.base_radius_m.powi(2)).sqrt(),
-                ],
+                curvature_radius_m: [g1.tip_edge_radius_m, (r * r - g2.base_radius_m.powi(2)).sqrt()],
             });
         }
         best

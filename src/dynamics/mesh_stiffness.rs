@@ -254,6 +254,10 @@ pub fn force_levels(pair: &GearPair, levels: usize) -> Vec<f64> {
     (0..=levels).map(|k| f_max * (k as f64 / levels as f64).powi(2)).collect()
 }
 
+/// The cap of the deflection iteration per table entry (safeguarded Newton; bisection or doubling
+/// alone needs fewer than 120 steps from the linear guess to 1e-12).
+pub const DEFLECTION_ITERATIONS: usize = 200;
+
 /// The static mesh: at each roll position ξᵢ = i·p_b/N, the mesh deflection δ under each force
 /// level (load shared among all slices in contact, each a Hertz contact in series with the
 /// teeth), and the number of tooth pairs in contact. Parallel over rows.
@@ -284,10 +288,12 @@ pub fn static_deflection_table(
                 let target = levels[k];
                 let (mut lo, mut hi) = (row[k - 1], f64::INFINITY);
                 let mut delta = row[k - 1] + (target - levels[k - 1]) / k_linear;
-                for _ in 0..200 {
+                let mut converged = false;
+                for _ in 0..DEFLECTION_ITERATIONS {
                     let (force, slope) = mesh_force(&slices, delta, cos_bb)?;
                     let residual = force - target;
                     if residual.abs() <= 1e-12 * target {
+                        converged = true;
                         break;
                     }
                     if residual > 0.0 {
@@ -300,6 +306,12 @@ pub fn static_deflection_table(
                         next = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * delta.max(1e-9) };
                     }
                     delta = next;
+                }
+                if !converged {
+                    return Err(format!(
+                        "the mesh deflection at roll {roll:.3e} m, force {target:.4e} N did not converge in \
+                         {DEFLECTION_ITERATIONS} iterations (last deflection {delta:.4e} m)"
+                    ));
                 }
                 row[k] = delta;
             }

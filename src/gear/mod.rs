@@ -14,6 +14,9 @@ use spec::invalid;
 pub use spec::{HertzContact, PairSpec, SpecError};
 use std::f64::consts::PI;
 
+/// The default tip edge radius over the normal module (`GearSpec::tip_edge_radius_mm`).
+pub const DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE: f64 = 0.1;
+
 /// One gear's radii and mass properties (SI).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Gear {
@@ -31,6 +34,8 @@ pub struct Gear {
     /// The trochoidal root fillet as (radius, half tooth-thickness angle), root circle upwards.
     pub fillet: Vec<(f64, f64)>,
     pub inertia_kgm2: f64,
+    /// Radius of the rounded tip edge (the tip-corner body of the contact).
+    pub tip_edge_radius_m: f64,
     /// Hand of the helix (gear 1's from the spec, gear 2's the opposite one).
     pub helix_hand: spec::HelixHand,
 }
@@ -249,6 +254,25 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         if half_tip <= 0.0 {
             return Err(invalid(&format!("{which}.profile_shift"), "the tooth comes to a point below the tip circle"));
         }
+        let tip_land = 2.0 * ra * half_tip;
+        let tip_edge_radius = match g.tip_edge_radius_mm {
+            None => DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE * mn,
+            Some(v) => {
+                let field = format!("{which}.tip_edge_radius_mm");
+                let v = positive(&field, v)? * 1e-3;
+                if v > 0.5 * tip_land {
+                    return Err(invalid(
+                        &field,
+                        format!(
+                            "must not exceed half the tip land ({:.3} mm), got {:.3} mm",
+                            0.5e3 * tip_land,
+                            v * 1e3
+                        ),
+                    ));
+                }
+                v
+            }
+        };
         let inertia_override = match g.inertia_kgm2 {
             Some(j) => Some(positive(&format!("{which}.inertia_kgm2"), j)?),
             None => None,
@@ -275,6 +299,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
                 g.teeth as u32,
             ),
             inertia_kgm2: 0.0,
+            tip_edge_radius_m: tip_edge_radius,
             helix_hand,
         };
         // Polar moment of inertia of the real section (fillet + involute), unless overridden.

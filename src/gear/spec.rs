@@ -62,6 +62,11 @@ pub struct GearSpec {
     /// Accept a gear whose root the rack cutter undercuts (refused by default).
     #[serde(default)]
     pub allow_undercut: bool,
+    /// Radius of the rounded edge between flank and tip, the body that touches the mating
+    /// flank in tip (corner) contact. Default 0.1 × m_n: a deburred edge (the paper gives none,
+    /// and a sharp corner is no Hertz contact). Must lie in (0, half the tip land].
+    #[serde(default)]
+    pub tip_edge_radius_mm: Option<f64>,
 }
 
 /// Basic rack (ISO 53 style), shared by both gears.

@@ -95,7 +95,10 @@ impl PartialResponse {
         let inside: Vec<usize> =
             (0..mesh.elements.len()).filter(|&e| mesh.elements[e].iter().all(|&n| node_within[n])).collect();
         if inside.is_empty() {
-            return Err(format!("no element lies within depth {depth_m} m of the load: h is smaller than the mesh"));
+            return Err(format!(
+                "no element lies within the depth h = {:.2} mm of the load: h must reach past the flank elements; raise h or refine the mesh",
+                depth_m * 1e3
+            ));
         }
         // Sub-mesh of the partial model; nodes shared with outside elements are the clamped section.
         let mut in_partial = vec![false; mesh.nodes.len()];

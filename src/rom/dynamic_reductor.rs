@@ -49,7 +49,7 @@ impl Default for DynamicBuildOptions {
             modes: 20,
             angles: 40,
             rom_torques_nm: vec![250.0],
-            depth_m: 3e-3,
+            depth_m: crate::rom::reductor::DEFAULT_CONTACT_DEPTH_M,
             p_en: crate::rom::svd::DEFAULT_P_EN,
             law: ApproachLaw::Weber,
             interpolation: Interpolation::CatmullRom,
@@ -246,11 +246,7 @@ pub fn build_dynamic_model(
     // Static analyses over one mesh cycle (and one more sample, one pitch on, for the closure
     // check), for each torque.
     progress(format!("static contact: {} angles × {} torques", options.angles, options.rom_torques_nm.len()));
-    let statics = StaticModel::new(
-        pair,
-        [&fe[0].reduced, &fe[1].reduced],
-        ContactModel::Hertz { law: options.law, depth_m: options.depth_m },
-    );
+    let statics = StaticModel::new(pair, [&fe[0].reduced, &fe[1].reduced], ContactModel::Hertz { law: options.law })?;
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
     let n_theta = options.angles;
     let jobs: Vec<(usize, usize)> =

@@ -26,7 +26,17 @@ pub struct ReducedGear {
     pub stiffness: Mat<f64>,
     /// What the reduced coordinates are; it decides how a flank load condenses.
     pub coordinates: Coordinates,
+    /// The depth h below the flank whose local deformation the basis leaves out for the Hertz
+    /// law to supply (PMOR-Hertz); `None` where the basis keeps it (standard CMS). The contact
+    /// law reads h here, so that reduction and law cannot disagree.
+    pub local_depth_m: Option<f64>,
 }
+
+/// The default depth h of PMOR-Hertz (partial models and Hertz approach alike): 3 mm, half the
+/// Kurokawa pairs' module. It must reach past the flank elements (the partial model is refused
+/// otherwise) and stay four Hertz half-widths deep (`contact::hertz::MAX_HALF_WIDTH_OVER_DEPTH`);
+/// the STE moves by under 1 % between 2 and 4 mm (BENCHMARKS, "Mesh independence").
+pub const DEFAULT_CONTACT_DEPTH_M: f64 = 3e-3;
 
 /// What a gear's reduced coordinates are. The static contact problem is condensed onto the
 /// contact forces through the response q = K_r⁻¹·b of the reduced load b of a flank load; both
@@ -191,7 +201,13 @@ pub fn pmor_hertz(
         CompressionReport { n_c: flank.len(), n_sv: c.n_sv, retained: c.retained, singular_values: c.singular_values };
     let flank_modes = flank_rows(&basis, &model.dofs, &flank);
     Ok((
-        ReducedGear { flank, flank_modes, stiffness, coordinates: Coordinates::UnitStiffness },
+        ReducedGear {
+            flank,
+            flank_modes,
+            stiffness,
+            coordinates: Coordinates::UnitStiffness,
+            local_depth_m: Some(depth_m),
+        },
         Reconstructor { basis, dofs: model.dofs.clone() },
         report,
     ))
@@ -221,6 +237,7 @@ pub fn standard_cms(model: &ClampedGear, factor: &Cholesky, flank: FlankGrid) ->
         };
         0.5 * (f(a, b) + f(b, a))
     });
-    let reduced = ReducedGear { flank, flank_modes, stiffness, coordinates: Coordinates::NodalForces };
+    let reduced =
+        ReducedGear { flank, flank_modes, stiffness, coordinates: Coordinates::NodalForces, local_depth_m: None };
     (reduced, Reconstructor { basis, dofs: model.dofs.clone() })
 }

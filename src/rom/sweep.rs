@@ -60,9 +60,9 @@ impl ReducedPair {
         Ok(ReducedPair { pair: pair.clone(), gears, method, compression })
     }
 
-    pub fn static_model(&self) -> StaticModel<'_> {
+    pub fn static_model(&self) -> Result<StaticModel<'_>, String> {
         let contact = match self.method {
-            Method::PmorHertz { depth_m, law, .. } => ContactModel::Hertz { law, depth_m },
+            Method::PmorHertz { law, .. } => ContactModel::Hertz { law },
             Method::Penalty { factor } => ContactModel::Penalty { factor },
         };
         StaticModel::new(&self.pair, [&self.gears[0], &self.gears[1]], contact)
@@ -72,7 +72,10 @@ impl ReducedPair {
     /// the reference position, half a step in), for each torque; parallel over cases. Positions
     /// beyond the first pitch use the tooth periodicity of the mesh (exact).
     pub fn sweep(&self, torques_nm: &[f64], angles: usize, pitches: f64) -> Vec<Result<StaticCase, String>> {
-        let model = self.static_model();
+        let model = match self.static_model() {
+            Ok(model) => model,
+            Err(e) => return vec![Err(e); torques_nm.len() * angles],
+        };
         let pitch = 2.0 * std::f64::consts::PI / self.pair.gear2.teeth as f64;
         let jobs: Vec<(f64, f64)> = torques_nm
             .iter()

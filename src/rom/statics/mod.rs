@@ -29,8 +29,8 @@ use crate::gear::GearPair;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ContactModel {
     /// Hertz line contact per axial section, approach referred to the depth h that the global
-    /// attachment modes removed.
-    Hertz { law: ApproachLaw, depth_m: f64 },
+    /// attachment modes removed (`ReducedGear::local_depth_m`).
+    Hertz { law: ApproachLaw },
     /// Node-to-surface penalty, both passes; each node's stiffness is `factor` × the ISO 6336
     /// mesh stiffness c_γα of its axial share of the face (the paper: two orders of magnitude
     /// stiffer than the bodies), halved per pass.
@@ -125,8 +125,26 @@ impl Element {
 }
 
 impl<'a> StaticModel<'a> {
-    pub fn new(pair: &GearPair, gears: [&'a ReducedGear; 2], contact: ContactModel) -> Self {
-        StaticModel { placement: PairPlacement::new(pair), gears, contact }
+    /// `Err` when Hertz contact is asked of a basis that keeps the local deformation, or of
+    /// gears reduced at different depths h.
+    pub fn new(pair: &GearPair, gears: [&'a ReducedGear; 2], contact: ContactModel) -> Result<Self, String> {
+        if let ContactModel::Hertz { .. } = contact {
+            match (gears[0].local_depth_m, gears[1].local_depth_m) {
+                (Some(a), Some(b)) if a == b => {}
+                (a, b) => {
+                    return Err(format!(
+                        "Hertz contact needs both gears reduced without their local deformation at one depth h, \
+                         got h = {a:?} / {b:?} m"
+                    ))
+                }
+            }
+        }
+        Ok(StaticModel { placement: PairPlacement::new(pair), gears, contact })
+    }
+
+    /// The depth h of the Hertz approach: the one the gears were reduced at.
+    fn contact_depth_m(&self) -> f64 {
+        self.gears[0].local_depth_m.expect("checked in StaticModel::new")
     }
 
     fn pair(&self) -> &GearPair {
@@ -141,7 +159,7 @@ impl<'a> StaticModel<'a> {
     /// the r_b1θ₁ − r_b2θ₂ they were evaluated at).
     fn elements(&self, theta: [f64; 2]) -> Vec<Element> {
         match self.contact {
-            ContactModel::Hertz { law, depth_m } => self.hertz_elements(theta, law, depth_m),
+            ContactModel::Hertz { law } => self.hertz_elements(theta, law, self.contact_depth_m()),
             ContactModel::Penalty { factor } => self.penalty_elements(theta, factor),
         }
     }
