@@ -98,3 +98,9 @@ fn tip_edge_radius_must_fit_on_the_tip_land() {
             < 1e-15
     );
 }
+
+#[test]
+fn yield_strength_must_be_positive() {
+    let spec = edit("density_kg_m3 = 7700.0", "density_kg_m3 = 7700.0\nyield_strength_mpa = -5.0");
+    assert!(refused(&spec).contains("material.yield_strength_mpa"));
+}

@@ -6,6 +6,7 @@
 
 pub mod fillet;
 pub mod involute;
+pub mod root_stress;
 pub mod spec;
 
 use involute::{inv, inv_inverse};
@@ -111,6 +112,8 @@ pub struct GearPair {
     pub youngs_modulus_pa: f64,
     pub poisson_ratio: f64,
     pub density_kg_m3: f64,
+    /// Yield strength: the bound of the tooth-root stress guard (`root_stress`).
+    pub yield_strength_pa: f64,
     pub mesh_damping_ratio: f64,
     /// Dedendum of the basic rack over the module, h_fP/m_n (ISO 6336-1's C_B needs it).
     pub rack_dedendum_coefficient: f64,
@@ -390,6 +393,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         youngs_modulus_pa: e,
         poisson_ratio: nu,
         density_kg_m3: rho,
+        yield_strength_pa: positive("material.yield_strength_mpa", mat.yield_strength_mpa)? * 1e6,
         mesh_damping_ratio: zeta,
         rack_dedendum_coefficient: hf,
         hertz_contact: spec.lumped.hertz_contact,

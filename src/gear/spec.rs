@@ -93,6 +93,15 @@ pub struct MaterialSpec {
     pub youngs_modulus_gpa: f64,
     pub poisson_ratio: f64,
     pub density_kg_m3: f64,
+    /// Yield strength, the bound of the tooth-root stress guard: a static case whose nominal
+    /// root stress (Lewis) exceeds it is refused. Default 1000 MPa, the order of a quenched and
+    /// tempered gear steel (the paper gives none): set your material's value.
+    #[serde(default = "default_yield_strength")]
+    pub yield_strength_mpa: f64,
+}
+
+fn default_yield_strength() -> f64 {
+    1000.0
 }
 
 /// How the two gears are mounted.

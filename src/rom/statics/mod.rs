@@ -23,7 +23,7 @@ use super::reductor::ReducedGear;
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{ContactKind, PairPlacement, SectionContact};
 use crate::dynamics::iso6336;
-use crate::gear::GearPair;
+use crate::gear::{root_stress, GearPair};
 
 /// How the flanks push on each other.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -349,6 +349,17 @@ impl<'a> StaticModel<'a> {
                 let mut pairs: Vec<i64> = loaded.iter().map(|e| e.pair).collect();
                 pairs.sort();
                 pairs.dedup();
+                // Each pair's load, at its force-weighted radius on each gear, must leave the
+                // roots below yield.
+                for &j in &pairs {
+                    let (mut force, mut moment) = (0.0, [0.0; 2]);
+                    for e in loaded.iter().filter(|e| e.pair == j) {
+                        force += e.force_n;
+                        moment = [moment[0] + e.force_n * e.radius_m[0], moment[1] + e.force_n * e.radius_m[1]];
+                    }
+                    root_stress::check_root_stress(p, force, moment.map(|m| m / force))
+                        .map_err(|m| format!("{}, tooth pair {j}: {m}", at()))?;
+                }
                 return Ok(StaticCase {
                     theta_rad: [(rb2 * theta2 + te) / rb1, theta2],
                     torque_nm,
