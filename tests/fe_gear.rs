@@ -127,29 +127,40 @@ fn flank_normals_are_tangent_to_the_base_circle() {
     }
 }
 
-/// The hand of helix, closed form of the lead: along the face, every flank node of a helical
-/// gear turns about the axis by s·tan β/r_p per metre (s = +1 right hand, −1 left), gear 2
-/// with the hand opposite to the spec's gear 1; and the flank normal is perpendicular to that
-/// helix through the node.
+/// The hand of helix and the helicoid, measured on the generated nodes against textbook helical
+/// gear geometry (not the mesher's twist formula):
+/// - the lead: a node's twist per unit face width, measured from its polar angle in the first
+///   and in every other slice, times the node's radius r, is the local helix angle,
+///   tan β_r = 2πr/p_z with the textbook lead p_z = π m_n z / sin β (so tan β_r = tan β·r/r_p at
+///   any radius); its sign is the hand (+ right, − left), gear 2 opposite to the spec's gear 1;
+/// - the involute helicoid: every flank normal makes the base helix angle with the transverse
+///   plane, |n_z| = sin β_b with sin β_b = sin β·cos α_n (ISO 21771), and is perpendicular to the
+///   measured helix through its node.
 #[test]
-fn helical_mesh_twists_by_the_lead_in_the_sense_of_its_hand() {
+fn helical_mesh_lead_and_normals_match_textbook_helicoid_geometry() {
     use gearfmu::gear::spec::HelixHand;
+    use std::f64::consts::PI;
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join("kurokawa_helical.toml");
     for hand in [HelixHand::Right, HelixHand::Left] {
         let mut spec = PairSpec::load(&path).unwrap();
         spec.rack.helix_hand = hand;
+        let (m_n, alpha_n, beta) = (
+            spec.rack.module_mm * 1e-3,
+            spec.rack.pressure_angle_deg.to_radians(),
+            spec.rack.helix_angle_deg.to_radians(),
+        );
+        assert!(beta > 0.0);
+        let sin_beta_b = beta.sin() * alpha_n.cos();
         let p = GearPair::from_spec(&spec).unwrap();
-        assert_eq!(p.gear1.helix_hand, hand);
-        assert_eq!(p.gear2.helix_hand, hand.opposite());
-        for gear in [&p.gear1, &p.gear2] {
-            let rate = gear.helix_hand.sign() * p.helix_angle_rad.tan() / gear.pitch_radius_m;
+        for (gear, sign) in [(&p.gear1, hand.sign()), (&p.gear2, -hand.sign())] {
+            let lead = PI * m_n * gear.teeth as f64 / beta.sin();
             let gm = mesh_gear(&p, gear, &MeshSpec::default());
             let at = |n: usize| gm.mesh.nodes[n];
             let flank: Vec<_> = gm.flank_nodes.iter().filter(|f| f.tooth == 0 && f.side == 1).collect();
-            let mut checked = 0;
+            let (mut checked, mut worst_lead, mut worst_normal): (usize, f64, f64) = (0, 0.0, 0.0);
             for f in &flank {
                 let x = at(f.node);
-                // The same profile row in slice 0: same radius.
+                // The same profile row in the first slice: same radius, lowest z.
                 let r = x[0].hypot(x[1]);
                 let base = flank
                     .iter()
@@ -157,14 +168,39 @@ fn helical_mesh_twists_by_the_lead_in_the_sense_of_its_hand() {
                     .filter(|y| (y[0].hypot(y[1]) - r).abs() < 1e-12)
                     .min_by(|a, b| a[2].total_cmp(&b[2]))
                     .unwrap();
-                let turned = x[1].atan2(x[0]) - base[1].atan2(base[0]);
-                assert!((turned - rate * (x[2] - base[2])).abs() < 1e-12, "{hand:?} z {}: turned {turned}", gear.teeth);
-                // Helix tangent through the node: d/dz of (r cos φ, r sin φ, z) with dφ/dz = rate.
-                let t = [-x[1] * rate, x[0] * rate, 1.0];
                 let n = f.normal;
+                worst_normal = worst_normal.max((n[2].abs() - sin_beta_b).abs());
+                assert!(
+                    (n[2].abs() - sin_beta_b).abs() < 1e-6,
+                    "{hand:?} z {}: |n_z| {} vs sin β_b {sin_beta_b}",
+                    gear.teeth,
+                    n[2]
+                );
+                let dz = x[2] - base[2];
+                if dz < 1e-6 {
+                    continue;
+                }
+                let turned = x[1].atan2(x[0]) - base[1].atan2(base[0]);
+                let measured = r * turned / dz; // tan β_r, signed by the hand
+                let expected = sign * 2.0 * PI * r / lead;
+                worst_lead = worst_lead.max((measured - expected).abs() / expected.abs());
+                assert!(
+                    (measured / expected - 1.0).abs() < 1e-9,
+                    "{hand:?} z {}: tan β_r measured {measured}, lead gives {expected}",
+                    gear.teeth
+                );
+                // The measured helix's tangent through the node: d/dz of (r cos φ, r sin φ, z).
+                let rate = turned / dz;
+                let t = [-x[1] * rate, x[0] * rate, 1.0];
                 assert!((n[0] * t[0] + n[1] * t[1] + n[2] * t[2]).abs() < 1e-6, "normal not on the flank");
                 checked += 1;
             }
+            println!(
+                "{hand:?} z {}: {checked} nodes, lead p_z = π m_n z / sin β = {:.2} mm; largest relative error of \
+                 tan β_r {worst_lead:.1e}, of |n_z| − sin β_b {worst_normal:.1e}",
+                gear.teeth,
+                lead * 1e3
+            );
             assert!(checked > 20);
         }
     }

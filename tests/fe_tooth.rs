@@ -1,49 +1,97 @@
-//! Single-tooth stiffness by finite elements at the pitch point of the Kurokawa spur pinion and
-//! wheel, against two independent references: the potential-energy method's tooth compliance
-//! (beam theory + Sainsot's foundation, `dynamics::mesh_stiffness`) and ISO 6336-1's c′_th.
+//! Single-tooth stiffness by finite elements on the Kurokawa spur pinion and wheel: the global
+//! part of the pitch-point compliance converges under refinement (the line-load total does not),
+//! and the rise of compliance toward the tip agrees with the potential-energy method's
+//! (beam theory + Sainsot's foundation, `dynamics::mesh_stiffness`), an independent model.
 
 mod common;
 
-use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::mesh_stiffness::tooth_compliance_per_width;
+use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::gear_mesh::{mesh_gear, MeshSpec};
 use gearfmu::fe::hex8::Formulation;
-use gearfmu::fe::tooth_stiffness::{single_tooth_compliance, tooth_compliance_along_profile};
+use gearfmu::fe::tooth_stiffness::{pitch_line_load, tooth_compliance_along_profile};
 use gearfmu::gear::GearPair;
+use gearfmu::rom::attachment::total_and_global_response;
 
 /// The Kurokawa spur pair on the medium mesh (4 axial slices).
 fn kurokawa_spur_on_a_medium_mesh() -> (GearPair, MeshSpec) {
     (common::kurokawa_spur(), common::medium_mesh(4))
 }
 
+/// (total, global at h = 3 mm) compliance per width (mm·µm/N) under the pitch line load of
+/// `gear`, with 4 axial slices and `across`/`profile`/`rim` elements in-plane; global = total −
+/// the partial model's response within depth h of the load (rom::attachment).
+fn total_and_global(
+    p: &GearPair,
+    gear: &gearfmu::gear::Gear,
+    across: usize,
+    profile: usize,
+    rim: usize,
+) -> (f64, f64, usize) {
+    let spec = MeshSpec {
+        elements_across_tooth: across,
+        elements_along_profile: profile,
+        elements_in_rim: rim,
+        axial_slices: 4,
+        ..Default::default()
+    };
+    let model = ClampedGear::new(p, gear, &spec, Formulation::IncompatibleModes);
+    let chol = model.factorize().unwrap();
+    let force = 1000.0;
+    let load = pitch_line_load(&model.mesh, gear, spec.axial_slices, force).unwrap();
+    let (t, g) = total_and_global_response(
+        &model.mesh.mesh,
+        &model.material,
+        Formulation::IncompatibleModes,
+        &model.dofs,
+        &chol,
+        &load,
+        3e-3,
+    )
+    .unwrap();
+    let work = |u: &[f64]| load.iter().map(|&(n, f)| (0..3).map(|c| f[c] * u[3 * n + c]).sum::<f64>()).sum::<f64>();
+    let per_width = |u: &[f64]| work(u) / (force * force) * p.face_width_m * 1e9;
+    (per_width(&t), per_width(&g), model.dofs.n_free)
+}
+
+/// Under a line load the FE tooth compliance at the load point has no limit: it is log-singular
+/// and grows with in-plane refinement (BENCHMARKS.md: +0.005 mm·µm/N per unit of ln refinement),
+/// so picking the mesh where FE/PEM ≈ 1 would be no evidence. What converges is the global part,
+/// total − the partial model's response within depth h = 3 mm of the load (the part PMOR-Hertz
+/// keeps from the FE; the local part is replaced by Weber's approach to the same depth). Checked
+/// on both gears from the medium mesh (6/12/6) to the paper-like in-plane mesh (8/16/8), 4 slices.
+/// Measured (mm·µm/N), 6/12/6 → 8/16/8: pinion total 0.03854 → 0.03986 (+3.42 %), global
+/// 0.03659 → 0.03634 (−0.67 %); wheel total 0.04163 → 0.04310 (+3.54 %), global 0.03969 →
+/// 0.03960 (−0.21 %). Global / potential energy on 8/16/8: 0.934 (pinion), 0.956 (wheel).
+/// The potential-energy compliance is printed beside it. It is not asserted: a beam with a
+/// foundation has no local term, and the global part has none by construction either, but it has
+/// lost the elastic zone within h of the load that the beam keeps; their ratio depends on h.
+/// The FE/PEM comparison that is evidence, the rise of compliance toward the tip (a difference in
+/// which the local part cancels), is the next test. ISO 6336-1 c′ is compared where it applies, on
+/// the contact pair, in pmor_hertz_statics and lumped_physics.
 #[test]
-fn pitch_point_tooth_compliance_agrees_with_the_potential_energy_method() {
-    let (p, spec) = kurokawa_spur_on_a_medium_mesh();
-    let mut pair_fe = 0.0;
+fn pitch_point_global_compliance_converges_under_refinement_where_the_line_load_total_does_not() {
+    let p = common::kurokawa_spur();
     for gear in [&p.gear1, &p.gear2] {
-        let fe = single_tooth_compliance(&p, gear, &spec, Formulation::IncompatibleModes).unwrap();
-        let pem = tooth_compliance_per_width(gear, &p, gear.pitch_radius_m, p.youngs_modulus_pa, p.poisson_ratio);
-        let ratio = fe.compliance_per_width / pem;
+        let pem = tooth_compliance_per_width(gear, &p, gear.pitch_radius_m, p.youngs_modulus_pa, p.poisson_ratio) * 1e9;
+        let (total_a, global_a, dofs_a) = total_and_global(&p, gear, 6, 12, 6);
+        let (total_b, global_b, dofs_b) = total_and_global(&p, gear, 8, 16, 8);
+        let (d_total, d_global) = (total_b / total_a - 1.0, global_b / global_a - 1.0);
         println!(
-            "z = {}: FE {:.5} mm·µm/N ({} DOF), potential energy {:.5} mm·µm/N, FE/PEM {ratio:.3}",
+            "z = {}: 6/12/6 ({dofs_a} DOF) total {total_a:.5}, global(h = 3 mm) {global_a:.5}; 8/16/8 ({dofs_b} DOF) \
+             total {total_b:.5}, global {global_b:.5} mm·µm/N; refinement: total {:+.2} %, global {:+.2} %; \
+             potential energy {pem:.5} (global / PEM {:.3})",
             gear.teeth,
-            fe.compliance_per_width * 1e9,
-            fe.dofs,
-            pem * 1e9
+            100.0 * d_total,
+            100.0 * d_global,
+            global_b / pem
         );
-        // Two independent models of the same tooth (3-D elasticity vs beam + foundation fit).
-        assert!((0.9..1.1).contains(&ratio), "FE/PEM = {ratio}");
-        pair_fe += fe.compliance_per_width;
+        // The singular part: the log coefficient 0.005 mm·µm/N × ln(16/12) ≈ 0.0014, 3.5 % of the total.
+        assert!(d_total > 0.02, "z = {}: the line-load total should still grow: {d_total}", gear.teeth);
+        // The global part settles: it moves by under 1 % (the accuracy the statics ask of their
+        // SVD truncation, issue 12 item 2), a fraction of the total's move.
+        assert!(d_global.abs() < 0.01, "z = {}: the global part should converge: {d_global}", gear.teeth);
     }
-    let c_fe = 1.0 / (pair_fe * 1e9);
-    // The q′ series is for steel (E_st = 206 GPa): compare at the pair's own modulus.
-    let c_th = iso6336::theoretical_single_stiffness(&p) * iso6336::material_factor(&p);
-    let c_prime = iso6336::single_stiffness(&p);
-    println!(
-        "pair at the pitch point: FE {c_fe:.2} N/(mm·µm); ISO c′_th·E/E_st {c_th:.2} (ratio {:.3}); ISO c′ = c′_th·C_M·C_B·E/E_st {c_prime:.2} (ratio {:.3})",
-        c_fe / c_th,
-        c_fe / c_prime
-    );
 }
 
 /// The tooth softens as the load climbs toward the tip: FE and the potential-energy method

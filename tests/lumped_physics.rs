@@ -2,12 +2,11 @@
 //! mesh stiffness, the mesh natural frequency √(k̄/m_e), conservation of energy, and the
 //! kinematics of backlash (contact loss, back-flank contact).
 
-use gearfmu::contact::hertz::{ApproachLaw, Body, LineContact};
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_natural_frequency_hz, LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
-use gearfmu::dynamics::mesh_stiffness::structural_compliance_per_width;
 use gearfmu::gear::{GearPair, HertzContact, PairSpec};
 use rustfft::{num_complex::Complex, FftPlanner};
+use std::f64::consts::PI;
 use std::path::Path;
 
 const PAIRS: [&str; 2] = ["kurokawa_spur.toml", "kurokawa_helical.toml"];
@@ -73,8 +72,10 @@ fn seed_example_reaches_the_power_balance_speed() {
 
 /// ISO 6336-1 method B: c_γα = c′(0.75ε_α + 0.25) with c′ from the q′ series, C_M 0.8, C_B,
 /// against the mean secant stiffness at 200 N/mm (ISO's range is ≥ 100 N/mm). Asserted for the
-/// potential-energy teeth with Yang & Lin's linearized contact; the load-dependent Weber contact
-/// (the default) is printed beside it: it is softer, see the closing note of issue 2.
+/// potential-energy teeth with Yang & Lin's linearized contact. The load-dependent Weber contact
+/// (the default) is printed beside it: over the whole pitch it is softer than c_γα (0.76 / 0.80),
+/// because c_γα's double-contact zone is 1.75 × c′; the Weber law is asserted against ISO where
+/// the standard's single stiffness c′ applies, in the test below.
 #[test]
 fn linearized_contact_mesh_stiffness_within_20_percent_of_iso_6336() {
     for name in PAIRS {
@@ -88,55 +89,171 @@ fn linearized_contact_mesh_stiffness_within_20_percent_of_iso_6336() {
     }
 }
 
-/// Where a single tooth pair carries the whole load (spur, single-contact zone), the mesh law must
-/// be the closed form δ(F) = F·c_teeth/b + δ_Hertz(F): the teeth in series with Weber's line
-/// contact. And the stiffness is load-dependent: the secant stiffness grows with load.
+/// The shipped law (potential-energy teeth + Weber contact) against ISO 6336-1's single stiffness
+/// c′ (method B, the q′ series with C_M, C_B and E/E_st; the implementation reproduces ISO/TR
+/// 6336-30's worked example to its printed digits, tests/iso6336.rs), where c′ applies: the
+/// single-contact zone of the spur pair, at ISO's loads (≥ 100 N/mm). Its mean over c_γα is not
+/// the comparison: c_γα = c′(0.75ε_α + 0.25) assumes a double-contact zone 1.75× as stiff, which
+/// the Weber contact is not (two half loads are softer per newton), see BENCHMARKS.md.
+///
+/// Measured (mean of F/δ over the 394 single-contact rows of 1024): 0.794 × c′ at 100 N/mm,
+/// 0.809 at 200, 0.825 at 392, 0.847 at 1000. The law does NOT agree with c′: it is 15–21 %
+/// soft in single contact, where PMOR-Hertz (FE) is within 4 % of c′ (0.961 at 392 N/mm,
+/// pmor_hertz_statics) and 14 % stiffer than this law at the same positions. A likely cause, not
+/// settled here: at the pitch point the law's pair compliance is 0.0803 (potential-energy teeth)
+/// + 0.0199 (Weber, referred to half the tooth thickness, ≈ 4.7 mm) mm·µm/N, while the FE global
+/// part at h = 3 mm (body included) is 0.0759 on the paper-like mesh (fe_tooth) and Weber to
+/// 3 mm 0.0173. The potential-energy teeth match the FE line-load total (which holds the local
+/// deformation as far as the mesh resolves it), so Weber's approach may count part of that local
+/// deformation a second time. A finding of this test, reported in issue 12, not tuned away.
+///
+/// So the assertion is a guard, one-sided on the measured side: the law may not move further from
+/// c′ than measured − 3 % (the table interpolates to 0.5 %; c′ is exact arithmetic), and may not
+/// come out stiffer than c′ + 5 % (ISO's own C_M = 0.8 is a measured-versus-theoretical factor;
+/// FE lands at 0.96–1.0 × c′, BENCHMARKS.md). A fix of the overlap passes it.
 #[test]
-fn weber_mesh_law_matches_the_single_pair_closed_form_and_stiffens_with_load() {
+fn weber_law_single_contact_stiffness_against_iso_6336_c_prime_is_17_percent_soft() {
     let p = pair_with("kurokawa_spur.toml", HertzContact::Weber);
+    let c_prime = iso6336::single_stiffness(&p);
     let mesh = lumped(&p);
     let n = mesh.drive.rows();
-    let i = (0..n).find(|&i| mesh.drive_pairs[i] == 1 && mesh.drive_pairs[(i + 8) % n] == 1).unwrap() + 4;
-    let roll = p.base_pitch_m * i as f64 / n as f64;
-    // The one pair touching at this roll: u = u_A + ξ + j·p_b inside the path.
-    let u = (-2..=2)
-        .map(|j| p.path_start_m + roll + j as f64 * p.base_pitch_m)
-        .find(|u| (p.path_start_m..=p.path_end_m).contains(u))
-        .unwrap();
-    let (r1, r2) = p.contact_radii(u);
-    let (rho1, rho2) = p.radii_of_curvature(u);
-    let alpha_t = p.transverse_pressure_angle_rad;
-    let depth = |g: &gearfmu::gear::Gear, r: f64| r * g.profile_half_thickness_angle(r, alpha_t).sin();
-    let body = |rho, h| Body {
-        youngs_modulus_pa: p.youngs_modulus_pa,
-        poisson_ratio: p.poisson_ratio,
-        radius_of_curvature_m: rho,
-        reference_depth_m: h,
-    };
-    let contact = LineContact {
-        length_m: p.face_width_m,
-        bodies: [body(rho1, depth(&p.gear1, r1)), body(rho2, depth(&p.gear2, r2))],
-        law: ApproachLaw::Weber,
-    };
-    let teeth = structural_compliance_per_width(&p, u) / p.face_width_m;
+    let rows: Vec<usize> = (0..n).filter(|&i| mesh.drive_pairs[i] == 1).collect();
+    let b_mm = p.face_width_m * 1e3;
+    for (specific_load, measured) in [(100.0, 0.794), (200.0, 0.809), (392.0, 0.825), (1000.0, 0.847)] {
+        let force = specific_load * b_mm;
+        // ISO's "mean value" convention for c_γα applied to the single zone: the mean over the
+        // zone's positions of the secant stiffness F/δ(F, ξ), per face width.
+        let single = rows
+            .iter()
+            .map(|&i| force / (mesh.drive.static_deflection(force, mesh.base_pitch_m * i as f64 / n as f64) * 1e6))
+            .sum::<f64>()
+            / rows.len() as f64
+            / b_mm;
+        let ratio = single / c_prime;
+        println!(
+            "{specific_load} N/mm: single-contact zone ({} of {n} rows) {single:.3} N/(mm·µm), ISO c′ {c_prime:.3}, ratio {ratio:.3}",
+            rows.len()
+        );
+        assert!(ratio > measured - 0.03 && ratio < 1.05, "{specific_load} N/mm: single zone / ISO c′ = {ratio}");
+    }
+}
+
+/// Spur geometry written out from examples/kurokawa_spur.toml (m 6 mm, α 20°, z 21/31, addendum
+/// 1·m, no profile shift, standard centre distance, E 200 GPa, ν 0.3, b 15 mm): textbook formulas
+/// only, nothing from the crate's geometry.
+struct TextbookSpur {
+    m: f64,
+    alpha: f64,
+    z: [f64; 2],
+    rb: [f64; 2],
+    ra: [f64; 2],
+    /// Length T₁T₂ of the line of action, a·sin α.
+    loa: f64,
+    /// u of the start of active contact A (from T₁): T₁T₂ − √(r_a2² − r_b2²).
+    u_a: f64,
+    /// Base pitch π m cos α.
+    pb: f64,
+}
+
+impl TextbookSpur {
+    fn new(p: &GearPair) -> Self {
+        assert_eq!((p.gear1.teeth, p.gear2.teeth), (21, 31), "the spec changed: update the numbers here");
+        let (m, alpha, z) = (6e-3, 20f64.to_radians(), [21.0, 31.0]);
+        let rb = z.map(|z| m * z / 2.0 * alpha.cos());
+        let ra = z.map(|z| m * (z / 2.0 + 1.0));
+        let loa = m * (z[0] + z[1]) / 2.0 * alpha.sin();
+        let u_a = loa - (ra[1] * ra[1] - rb[1] * rb[1]).sqrt();
+        TextbookSpur { m, alpha, z, rb, ra, loa, u_a, pb: PI * m * alpha.cos() }
+    }
+
+    /// ε_α = (√(r_a1² − r_b1²) + √(r_a2² − r_b2²) − a·sin α)/p_b.
+    fn contact_ratio(&self) -> f64 {
+        ((self.ra[0].powi(2) - self.rb[0].powi(2)).sqrt() + (self.ra[1].powi(2) - self.rb[1].powi(2)).sqrt() - self.loa)
+            / self.pb
+    }
+
+    /// Half the chordal tooth thickness of gear i at radius r (the depth Weber's approach is
+    /// referred to in the lumped law): r·sin ψ, ψ = π/(2z) + inv α − inv α_r, cos α_r = r_b/r.
+    fn half_thickness(&self, i: usize, r: f64) -> f64 {
+        let inv = |a: f64| a.tan() - a;
+        let psi = PI / (2.0 * self.z[i]) + inv(self.alpha) - inv((self.rb[i] / r).acos());
+        r * psi.sin()
+    }
+}
+
+/// Weber's approach of two steel cylinders, written out from the formula (Weber 1921; design
+/// §4.3), both bodies E, ν, referred to depths h₁, h₂:
+/// δ = Σᵢ 2P(1−ν²)/(π l E)·[ln(2hᵢ/b) − ν/(2(1−ν))], b = √(4PR/(π l E*)), 1/R = 1/ρ₁ + 1/ρ₂,
+/// E* = E/(2(1−ν²)).
+fn weber_approach(force: f64, length: f64, e: f64, nu: f64, rho: [f64; 2], depth: [f64; 2]) -> f64 {
+    let r = 1.0 / (1.0 / rho[0] + 1.0 / rho[1]);
+    let e_star = e / (2.0 * (1.0 - nu * nu));
+    let b = (4.0 * force * r / (PI * length * e_star)).sqrt();
+    let a = 2.0 * force * (1.0 - nu * nu) / (PI * length * e);
+    depth.iter().map(|h| a * ((2.0 * h / b).ln() - nu / (2.0 * (1.0 - nu)))).sum()
+}
+
+/// Where a single tooth pair carries the whole load (spur, single-contact zone), the mesh law
+/// must be the teeth (linear in F) in series with Weber's line contact. Independent reference:
+/// Weber's approach written out above on textbook geometry (ρ₁ = u, ρ₂ = a sin α − u, depths
+/// from the involute's tooth thickness), none of the crate's contact or geometry code. What is
+/// left, δ_law(F) − δ_Weber(F), must then be linear in F: the same compliance per newton at every
+/// load from 25 to 1000 N/mm, while the Weber part alone falls by 38 % per newton over that range
+/// (measured: remainder 0.08030 → 0.08035 mm·µm/N, Weber 0.02797 → 0.01728 mm·µm/N).
+/// The teeth's own compliance is the potential-energy method's, checked against FE in fe_tooth.
+/// And the stiffness is load-dependent: the secant stiffness grows with load.
+#[test]
+fn weber_mesh_law_is_linear_teeth_in_series_with_weber_written_out_and_stiffens_with_load() {
+    let p = pair_with("kurokawa_spur.toml", HertzContact::Weber);
+    let t = TextbookSpur::new(&p);
+    let mesh = lumped(&p);
+    let n = mesh.drive.rows();
+    // The middle of the single-contact zone by the textbook kinematics: a roll ξ (from A) in
+    // ((ε_α − 1)p_b, p_b) has one pair in contact, at u = u_A + ξ.
+    let eps = t.contact_ratio();
+    let roll = t.pb * (eps - 1.0 + 0.5 * (2.0 - eps));
+    let row = (roll / t.pb * n as f64).round() as usize;
+    assert_eq!(mesh.drive_pairs[row], 1, "the table has one pair at the middle of the single-contact zone");
+    let roll = t.pb * row as f64 / n as f64;
+    let u = t.u_a + roll;
+    let rho = [u, t.loa - u];
+    let radius = [t.rb[0].hypot(rho[0]), t.rb[1].hypot(rho[1])];
+    let depth = [t.half_thickness(0, radius[0]), t.half_thickness(1, radius[1])];
+    let (e, nu, b) = (200e9, 0.3, 15e-3);
+    assert_eq!((p.youngs_modulus_pa, p.poisson_ratio, p.face_width_m), (e, nu, b));
+    println!(
+        "u = {:.4} mm (module {} mm): ρ {:.3} / {:.3} mm, depth h {:.3} / {:.3} mm",
+        u * 1e3,
+        t.m * 1e3,
+        rho[0] * 1e3,
+        rho[1] * 1e3,
+        depth[0] * 1e3,
+        depth[1] * 1e3
+    );
+    let mut remainder = Vec::new();
     let mut previous_secant = 0.0;
     for specific_load in [25.0, 100.0, 400.0, 1000.0] {
-        let force = specific_load * 1e3 * p.face_width_m;
-        let closed_form = force * teeth + contact.hertz_approach(force);
+        let force = specific_load * 1e3 * b;
         let law = mesh.drive.static_deflection(force, roll);
-        let error = (law - closed_form).abs() / closed_form;
-        // The law interpolates linearly between force levels (dense where the contact is most
-        // nonlinear); 0.5 % bounds that interpolation.
+        let weber = weber_approach(force, b, e, nu, rho, depth);
+        // mm·µm/N per face width.
+        let teeth = (law - weber) / force * b * 1e9;
         println!(
-            "{specific_load} N/mm: δ law {:.4} µm, closed form {:.4} µm, error {:.3} %",
+            "{specific_load} N/mm: δ law {:.4} µm, Weber written out {:.4} µm ({:.5} mm·µm/N), remainder {teeth:.5} mm·µm/N",
             law * 1e6,
-            closed_form * 1e6,
-            100.0 * error
+            weber * 1e6,
+            weber / force * b * 1e9
         );
-        assert!(error < 5e-3, "{specific_load} N/mm: {law} vs {closed_form}");
+        remainder.push(teeth);
         let secant = mesh.drive.mean_secant_stiffness(force);
         assert!(secant > previous_secant, "secant stiffness must grow with load");
         previous_secant = secant;
+    }
+    // The law interpolates linearly between force levels (dense where the contact is most
+    // nonlinear), to 0.5 % of δ; over the teeth's share of δ (≥ 75 % here) that is < 0.7 %.
+    let mean = remainder.iter().sum::<f64>() / remainder.len() as f64;
+    for (r, load) in remainder.iter().zip([25, 100, 400, 1000]) {
+        assert!((r / mean - 1.0).abs() < 0.007, "{load} N/mm: remainder {r} vs mean {mean} mm·µm/N: not linear");
     }
 }
 
@@ -301,15 +418,17 @@ fn unloaded_mesh_loses_contact_and_hits_the_back_flank() {
     assert_eq!(free_force_max, 0.0);
 }
 
-/// Under the seed load, the number of pairs in contact alternates between 1 and 2 for the spur
-/// pair with duty (ε_α − 1) in double contact, a closed-form check of the contact tables.
+/// The number of pairs in contact alternates between 1 and 2 for the spur pair with duty
+/// (ε_α − 1) in double contact; ε_α from the textbook formula written out here (tip and base
+/// radii, centre distance), not from the path ends the table is built on.
 #[test]
-fn spur_double_contact_share_equals_contact_ratio_minus_one() {
+fn spur_double_contact_share_equals_textbook_contact_ratio_minus_one() {
     let p = pair("kurokawa_spur.toml");
+    let eps = TextbookSpur::new(&p).contact_ratio();
     let mesh = lumped(&p);
     let double = mesh.drive_pairs.iter().filter(|&&n| n == 2).count() as f64 / mesh.drive_pairs.len() as f64;
     let single = mesh.drive_pairs.iter().filter(|&&n| n == 1).count() as f64 / mesh.drive_pairs.len() as f64;
-    println!("double-contact share {double:.4}, ε_α − 1 = {:.4}", p.transverse_contact_ratio - 1.0);
-    assert!((double - (p.transverse_contact_ratio - 1.0)).abs() < 2.0 / mesh.drive_pairs.len() as f64);
+    println!("double-contact share {double:.4}, textbook ε_α − 1 = {:.4}", eps - 1.0);
+    assert!((double - (eps - 1.0)).abs() < 2.0 / mesh.drive_pairs.len() as f64);
     assert!((single + double - 1.0).abs() < 1e-12);
 }

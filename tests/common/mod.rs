@@ -10,7 +10,8 @@ pub fn kurokawa_spur() -> GearPair {
 }
 
 /// A mesh finer than the default in-plane: 6 across the tooth, 12 along the profile, 6 in the
-/// rim (FE/PEM at the pitch point is within 1 % there, BENCHMARKS.md).
+/// rim. (The line-load FE/PEM ratio at the pitch point happens to be ≈ 1 on it; that ratio grows
+/// with refinement and is no evidence, see fe_tooth.)
 pub fn medium_mesh(axial_slices: usize) -> MeshSpec {
     MeshSpec {
         elements_across_tooth: 6,

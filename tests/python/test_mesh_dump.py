@@ -1,9 +1,9 @@
 """Plausibility of the mesh-law dump (``fmu-build inspect --json``).
 
 Independent evidence: textbook involute geometry computed here from the TOML
-spec alone (base radii, transverse base pitch, bounds on the gear inertias
-from solid annuli at root and tip radius), the ISO 6336 range of mesh
-stiffness per face width, the known facts that Hertzian line contact in
+spec alone (base radii, transverse base pitch, ε_α, bounds on the gear inertias
+from solid annuli at root and tip radius), ISO 6336-1's c′ in the spur pair's
+single-contact zone (a one-sided guard on a known 19 % gap, see below), the known facts that Hertzian line contact in
 series with the teeth stiffens with the load and that a helical mesh
 (overlap) has a smoother stiffness than a spur mesh, and the small-vibration
 natural frequency √(k_t/m_e)/2π of the mesh mode.  Everything the FMU integrates
@@ -110,16 +110,65 @@ def test_deflection_tables(gear_case, gear_fmus):
     m = int(np.searchsorted(levels, f_ref, side="right") - 1)
     tangent = _segment_stiffness(mesh, "drive_deflection_m")[:, m]
     assert mesh["reference_stiffness_n_per_m"] == pytest.approx(tangent.mean(), rel=1e-2)
-    # ISO 6336 mesh stiffness of steel gears is about 10-20 N/(mm·µm) per face width;
-    # accept a factor of two either way.  c_γα is a secant stiffness (load over mean
-    # deflection), so take F_ref over the mean static deflection under F_ref; the tangent
-    # (reference) stiffness must be in the same band.
+    # A scale check (units, not evidence): steel gear meshes are about 10-20 N/(mm·µm) per face
+    # width; c_γα is a secant stiffness (load over mean deflection), so take F_ref over the mean
+    # static deflection under F_ref; the tangent (reference) stiffness must be of the same order.
     secant = f_ref / _static_deflection(mesh, "drive_deflection_m", f_ref).mean()
     for stiffness in (secant, mesh["reference_stiffness_n_per_m"]):
         per_width = stiffness / width_mm / 1e6
         assert 5.0 < per_width < 40.0, per_width
-    # ... and within a factor of two of the ISO 6336-1 value the dump reports.
-    assert 0.5 < secant / mesh["iso6336_c_gamma_alpha_n_per_m"] < 2.0
+
+
+def _textbook_contact_ratio(spec_path):
+    """ε_α from the textbook formula on the spec's numbers alone: tip radii r + m_n(h_a + x),
+    base radii r cos α_t, the centre distance of a V-zero pair (x₁ + x₂ = 0) and p_bt."""
+    g = _geometry(spec_path)
+    spec = tomllib.loads(spec_path.read_text())
+    shifts = [spec[k].get("profile_shift", 0.0) for k in ("gear1", "gear2")]
+    assert abs(sum(shifts)) < 1e-12, "the formula below takes the standard centre distance"
+    r = [0.5 * g["m_t"] * z for z in g["teeth"]]
+    r_b = [x * math.cos(g["alpha_t"]) for x in r]
+    r_a = [x + g["m_n"] * (g["ha"] + s) for x, s in zip(r, shifts)]
+    path = sum(math.sqrt(a * a - b * b) for a, b in zip(r_a, r_b)) - sum(r) * math.sin(g["alpha_t"])
+    return path / (math.pi * g["m_t"] * math.cos(g["alpha_t"]))
+
+
+# The mesh law against ISO 6336-1 (the dump's c_γα comes from src/dynamics/iso6336.rs, which
+# reproduces ISO/TR 6336-30's worked example, tests/iso6336.rs), at the dump's reference force
+# (100-1000 N/mm, ISO's range).  This replaces a factor-of-two band (0.5-2 × c_γα).
+#  - spur: where ISO's single stiffness c′ = c_γα/(0.75ε_α + 0.25) applies, the single-contact
+#    zone (rolls (ε_α − 1)p_b < ξ < p_b from the start of the path, textbook ε_α).  Measured:
+#    0.809 × c′ at F_ref = 200 N/mm (0.794-0.847 from 100 to 1000 N/mm, tests/lumped_physics.rs).
+#    The lumped law is 15-21 % soft there, where the PMOR-Hertz FE model is 0.96 × c′: a finding
+#    (see lumped_physics::weber_law_single_contact_stiffness_against_iso_6336_c_prime_is_17_percent_soft),
+#    guarded one-sided: no further from c′ than measured − 0.03 (the table interpolates to 0.5 %),
+#    and no stiffer than c′ + 5 %.
+#  - helical: ε_γ > 2 leaves no single-contact zone, so only the mean secant stiffness over c_γα
+#    is available.  Measured 0.802 at 200 N/mm.  c_γα's double-contact weighting (1.75 c′) is not
+#    what Weber's contact gives (BENCHMARKS.md), so this is a regression guard, not agreement:
+#    no lower than measured − 0.03, no higher than ISO's own ±20 % expectation.
+ISO_GUARD = {"spur": ("single-contact zone / c′", 0.809), "helical": ("mean / c_γα", 0.802)}
+
+
+def _iso_ratio(name, spec_path, mesh):
+    f_ref = mesh["reference_force_n"]
+    deflection = _static_deflection(mesh, "drive_deflection_m", f_ref)
+    c_gamma = mesh["iso6336_c_gamma_alpha_n_per_m"]
+    if name == "spur":
+        eps = _textbook_contact_ratio(spec_path)
+        p_b, roll = mesh["base_pitch_m"], np.asarray(mesh["roll_m"])
+        single = (roll > (eps - 1.0) * p_b) & (roll < p_b)
+        # ISO's "mean value of the mesh stiffness", over the single zone's positions.
+        return float(np.mean(f_ref / deflection[single])) / (c_gamma / (0.75 * eps + 0.25))
+    return f_ref / deflection.mean() / c_gamma
+
+
+def test_mesh_law_against_iso_6336(gear_case):
+    what, measured = ISO_GUARD[gear_case.name]
+    ratio = _iso_ratio(gear_case.name, gear_case.spec_path, gear_case.mesh)
+    print(f"{gear_case.name}: {what} = {ratio:.3f} (measured {measured})")
+    upper = 1.05 if gear_case.name == "spur" else 1.2
+    assert measured - 0.03 < ratio < upper, ratio
 
 
 def test_contact_stiffens_with_load(gear_case):
