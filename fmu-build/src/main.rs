@@ -254,6 +254,30 @@ fn ste_command(
             stiffness / iso,
             stiffness_mean_of_positions / iso
         );
+        // Zone by zone (spur): the single-zone stiffness and the double/single ratio carry the
+        // bodies' torsion, which the bore radii set; the zone contrast does not.
+        let positions: Vec<(f64, usize)> =
+            cases.iter().filter(|c| c.torque_nm == t).map(|c| (c.ste_m, c.pairs_in_contact)).collect();
+        if let Some(z) = iso6336::ZoneComparison::from_sweep(&pair, t, &positions) {
+            println!(
+                "  zones: single contact mean STE {:.3} µm ({} positions), double {:.3} µm ({}); \
+                 single-zone stiffness {:.2} N/(mm·µm), ISO c′ {:.2} (ratio {:.3}); \
+                 double/single {:.3} (ISO {}); \
+                 zone contrast (STE₁ − STE₂)/(F/b) {:.5} mm·µm/N, ISO (1 − 1/1.75)/c′ {:.5} (ratio {:.3}, bore-independent)",
+                z.single_ste_m * 1e6,
+                z.single_positions,
+                z.double_ste_m * 1e6,
+                z.double_positions,
+                z.single_stiffness,
+                z.iso_single_stiffness,
+                z.single_stiffness / z.iso_single_stiffness,
+                z.double_over_single,
+                iso6336::IMPLIED_DOUBLE_OVER_SINGLE,
+                z.zone_contrast,
+                z.iso_zone_contrast,
+                z.zone_contrast / z.iso_zone_contrast
+            );
+        }
     }
     println!(
         "reduction {offline:.2} s; {} cases in {sweep:.2} s ({:.3} s per case on {} threads)",

@@ -56,3 +56,70 @@ pub fn mesh_stiffness_c_gamma_alpha_at(pair: &GearPair, specific_load_n_per_mm: 
 pub fn to_newton_per_metre(c_n_per_mm_um: f64, face_width_m: f64) -> f64 {
     c_n_per_mm_um * 1e6 * face_width_m * 1e3
 }
+
+/// c′ at a specific load w (N/mm), with the same (w/100)^0.25 light-load factor as
+/// [`mesh_stiffness_c_gamma_alpha_at`].
+pub fn single_stiffness_at(pair: &GearPair, specific_load_n_per_mm: f64) -> f64 {
+    single_stiffness(pair) * (specific_load_n_per_mm / 100.0).min(1.0).powf(0.25)
+}
+
+/// Double-contact stiffness over c′ that c_γα implies for a spur pair whose stiffness is c′ over
+/// the single-contact share 2 − ε_α of a pitch and c_d over the double-contact share ε_α − 1:
+/// c′(2 − ε_α) + c_d(ε_α − 1) = c′(0.75 ε_α + 0.25) gives c_d = 1.75 c′ for every ε_α.
+pub const IMPLIED_DOUBLE_OVER_SINGLE: f64 = 1.75;
+
+/// The spur STE sorted by contact zone and set beside ISO 6336-1.
+///
+/// Every compliance in series with all tooth pairs (the torsion of the gear bodies between the
+/// clamped bores and the teeth, which the bore radii set) adds the same amount to the STE in
+/// single and in double contact. The single-zone stiffness and the double/single ratio move with
+/// it; the zone contrast (STE₁ − STE₂)/(F/b) does not. ISO's c_γα = c′(0.75 ε_α + 0.25) read zone
+/// by zone (see [`IMPLIED_DOUBLE_OVER_SINGLE`]) gives that contrast as (1 − 1/1.75)/c′.
+#[derive(Debug, Clone, Copy)]
+pub struct ZoneComparison {
+    /// Mean STE (m) over the positions with one pair in contact, and their number.
+    pub single_ste_m: f64,
+    pub single_positions: usize,
+    /// Mean STE (m) over the positions with two pairs in contact, and their number.
+    pub double_ste_m: f64,
+    pub double_positions: usize,
+    /// Force along the line of action per face width over the single-zone mean STE, N/(mm·µm).
+    pub single_stiffness: f64,
+    /// ISO's c′ at this load, N/(mm·µm).
+    pub iso_single_stiffness: f64,
+    /// Double-zone stiffness over single-zone stiffness (STE₁ / STE₂); ISO: 1.75.
+    pub double_over_single: f64,
+    /// (STE₁ − STE₂)/(F/b) in mm·µm/N: the bore-independent figure.
+    pub zone_contrast: f64,
+    /// ISO's (1 − 1/1.75)/c′ in mm·µm/N.
+    pub iso_zone_contrast: f64,
+}
+
+impl ZoneComparison {
+    /// From one torque's sweep: (STE in m, pairs in contact) per position. `None` unless the pair
+    /// is spur and both zones occur.
+    pub fn from_sweep(pair: &GearPair, torque_nm: f64, positions: &[(f64, usize)]) -> Option<Self> {
+        if pair.helix_angle_rad.abs() > 1e-12 {
+            return None;
+        }
+        let zone = |n: usize| {
+            let ste: Vec<f64> = positions.iter().filter(|p| p.1 == n).map(|p| p.0).collect();
+            (!ste.is_empty()).then(|| (ste.iter().sum::<f64>() / ste.len() as f64, ste.len()))
+        };
+        let ((single, n1), (double, n2)) = (zone(1)?, zone(2)?);
+        let b_mm = pair.face_width_m * 1e3;
+        let line_load = torque_nm / pair.gear1.base_radius_m / b_mm; // N/mm along the line of action
+        let iso_c = single_stiffness_at(pair, torque_nm / pair.gear1.pitch_radius_m / b_mm);
+        Some(ZoneComparison {
+            single_ste_m: single,
+            single_positions: n1,
+            double_ste_m: double,
+            double_positions: n2,
+            single_stiffness: line_load / (single * 1e6),
+            iso_single_stiffness: iso_c,
+            double_over_single: single / double,
+            zone_contrast: (single - double) * 1e6 / line_load,
+            iso_zone_contrast: (1.0 - 1.0 / IMPLIED_DOUBLE_OVER_SINGLE) / iso_c,
+        })
+    }
+}
