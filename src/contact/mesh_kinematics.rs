@@ -85,6 +85,18 @@ impl SectionContact {
     }
 }
 
+/// The radius of curvature of a tip corner in contact, `past_m` along the line of action beyond
+/// the end of the path of contact (where conjugate contact hands over to the corner). On the
+/// rounded edge it is the edge radius; at the hand-over it is the involute's at the tip. Between
+/// them a C¹ blend over one edge radius of roll replaces the step that Hertz's law cannot
+/// describe (its band straddles the change of curvature), and keeps the contact potential
+/// W(α, R) continuous along the motion, which the energy balance of the dynamics needs.
+fn corner_radius(gear: &Gear, past_m: f64) -> f64 {
+    let involute = (gear.tip_radius_m.powi(2) - gear.base_radius_m.powi(2)).sqrt();
+    let x = (past_m / gear.tip_edge_radius_m).clamp(0.0, 1.0);
+    involute + (gear.tip_edge_radius_m - involute) * x * x * (3.0 - 2.0 * x)
+}
+
 /// The pair placed in the world, with the involute constants of its contact flanks.
 #[derive(Debug, Clone)]
 pub struct PairPlacement {
@@ -257,7 +269,10 @@ impl PairPlacement {
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, tip2),
                 arm_ratio: cos_bb,
                 // The corner is gear 2's rounded tip edge, not its involute.
-                curvature_radius_m: [(r * r - g1.base_radius_m.powi(2)).sqrt(), g2.tip_edge_radius_m],
+                curvature_radius_m: [
+                    (r * r - g1.base_radius_m.powi(2)).sqrt(),
+                    corner_radius(g2, p.path_start_m - u),
+                ],
             });
         }
         // Gear 1's tip corner on gear 2's flank.
@@ -274,7 +289,7 @@ impl PairPlacement {
                 radius_m: [g1.tip_radius_m, r],
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(1, j, z, tip1),
                 arm_ratio: cos_bb * self.arm_on_gear1_of_gear2_normal(w1, theta[1], j, z) / g1.base_radius_m,
-                curvature_radius_m: [g1.tip_edge_radius_m, (r * r - g2.base_radius_m.powi(2)).sqrt()],
+                curvature_radius_m: [corner_radius(g1, u - p.path_end_m), (r * r - g2.base_radius_m.powi(2)).sqrt()],
             });
         }
         best
