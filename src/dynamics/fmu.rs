@@ -219,6 +219,7 @@ impl GearPairFmu {
 ///   default max_step 1e-5 s);
 /// - PMOR-Hertz: 104 µs per sub-step (103–108) → 10⁵ sub-steps ≈ 10 s (h ≤ 0.36 s at the spur
 ///   model's max_step 3.6e-6 s).
+///
 /// A longer communication step is refused before any work, naming h, max_step and the bound.
 pub const MAX_SUBSTEPS_LUMPED: f64 = 4e7;
 pub const MAX_SUBSTEPS_PMOR: f64 = 1e5;
