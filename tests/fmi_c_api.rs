@@ -34,22 +34,32 @@ fn assert_logged(instance: &str, needle: &str) {
     assert!(lines.iter().any(|l| l.contains(needle)), "no log line with {needle:?} for {instance}: {lines:?}");
 }
 
-/// A resources folder with the spur pair's model data; returns (folder, GUID).
+/// A resources folder with the lumped model data of an example pair; returns (folder, GUID).
+fn resources_of(example: &str) -> (PathBuf, String) {
+    log::set_logger(&Capture).ok();
+    log::set_max_level(log::LevelFilter::Trace);
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(format!("{example}.toml"));
+    let pair = GearPair::from_spec(&PairSpec::load(&spec).unwrap()).unwrap();
+    let model = ModelKind::Lumped(LumpedMesh::from_pair(&pair).unwrap());
+    let guid = ModelFile::compute_guid(gearfmu::interface::VARIABLES_TOML, &pair.name, &model);
+    let dir =
+        std::env::temp_dir().join(format!("gearfmu-c-api-{}", std::process::id())).join(example).join("res ources");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = ModelFile { guid: guid.clone(), pair_name: pair.name, model };
+    std::fs::write(dir.join(FILE_NAME), file.to_bytes()).unwrap();
+    (dir, guid)
+}
+
+/// The spur pair's resources (the FMU most tests use).
 fn resources() -> &'static (PathBuf, String) {
     static R: OnceLock<(PathBuf, String)> = OnceLock::new();
-    R.get_or_init(|| {
-        log::set_logger(&Capture).ok();
-        log::set_max_level(log::LevelFilter::Trace);
-        let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
-        let pair = GearPair::from_spec(&PairSpec::load(&spec).unwrap()).unwrap();
-        let model = ModelKind::Lumped(LumpedMesh::from_pair(&pair).unwrap());
-        let guid = ModelFile::compute_guid(gearfmu::interface::VARIABLES_TOML, &pair.name, &model);
-        let dir = std::env::temp_dir().join(format!("gearfmu-c-api-{}", std::process::id())).join("res ources");
-        std::fs::create_dir_all(&dir).unwrap();
-        let file = ModelFile { guid: guid.clone(), pair_name: pair.name, model };
-        std::fs::write(dir.join(FILE_NAME), file.to_bytes()).unwrap();
-        (dir, guid)
-    })
+    R.get_or_init(|| resources_of("kurokawa_spur"))
+}
+
+/// The helical pair's: another FMU, with another GUID.
+fn helical_resources() -> &'static (PathBuf, String) {
+    static R: OnceLock<(PathBuf, String)> = OnceLock::new();
+    R.get_or_init(|| resources_of("kurokawa_helical"))
 }
 
 fn uri(dir: &Path) -> String {
@@ -206,7 +216,7 @@ fn parameters_before_init_are_applied() {
     assert_eq!(set(c, "w_1_start", 20.0), OK);
     assert_eq!(set(c, "w_2_start", 20.0 * 21.0 / 31.0), OK);
     assert_eq!(set(c, "max_step", -1.0), ERR);
-    assert_logged("params", "max_step must be > 0, got -1");
+    assert_logged("params", "max_step must be a finite, positive, normal number of seconds, got -1e0");
     assert_eq!(fmi2Reset(c), OK);
     assert_eq!(set(c, "w_1_start", 20.0), OK);
     assert_eq!(fmi2EnterInitializationMode(c), OK);
@@ -330,7 +340,7 @@ fn fmu_state_get_set_and_serialize_reproduce_outputs_bit_for_bit() {
     bytes[0] ^= 0xff;
     let mut bad: fmi2FMUstate = std::ptr::null_mut();
     assert_eq!(fmi2DeSerializeFMUstate(other, bytes.as_ptr() as *const fmi2Byte, size, &mut bad), ERR);
-    assert_logged("state-2", "serialized FMU state has a wrong header");
+    assert_logged("state-2", "serialized FMU state has a wrong magic");
     for s in [&mut state, &mut restored] {
         assert_eq!(fmi2FreeFMUstate(c, s), OK);
     }
@@ -396,4 +406,352 @@ fn instantiate_refuses_a_wrong_guid_bad_uri_and_damaged_model_data() {
     std::fs::remove_file(damaged_dir.join(FILE_NAME)).unwrap();
     assert!(instantiate_at("missing", &damaged_dir, guid).is_null());
     assert_logged("missing", "cannot read");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Issue 13, item 1: every bad input answered and survivable.
+// ---------------------------------------------------------------------------------------------
+
+const DISCARD: fmi2Status = fmi2Status_fmi2Discard;
+
+fn state_of(c: fmi2Component) -> fmi2FMUstate {
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), OK);
+    state
+}
+
+fn serialize(c: fmi2Component, state: fmi2FMUstate) -> Vec<u8> {
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), OK);
+    let mut bytes = vec![0u8; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr() as *mut fmi2Byte, size), OK);
+    bytes
+}
+
+/// fmi2DeSerializeFMUstate of `bytes` into a new FMU state.
+fn deserialize(c: fmi2Component, bytes: &[u8]) -> (fmi2Status, fmi2FMUstate) {
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    let status = fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut state);
+    (status, state)
+}
+
+/// FMI 2.0.4 §4.2.3: a status the slave cannot give is fmi2Discard, logged, and the instance
+/// goes on stepping; the ones it can give (fmi2LastSuccessfulTime, fmi2Terminated) are right.
+#[test]
+fn status_queries_without_an_answer_are_discarded_logged_and_survivable() {
+    let name = "status";
+    let c = initialized(name, None);
+    run(c, 0.0, 3, 1e-4);
+    let kinds = [
+        fmi2StatusKind_fmi2DoStepStatus,
+        fmi2StatusKind_fmi2PendingStatus,
+        fmi2StatusKind_fmi2LastSuccessfulTime,
+        fmi2StatusKind_fmi2Terminated,
+        77,
+    ];
+    let mut steps = 3;
+    let mut step = |c| {
+        assert_eq!(fmi2DoStep(c, steps as f64 * 1e-4, 1e-4, 1), OK, "the instance steps on after a discard");
+        steps += 1;
+    };
+    for kind in kinds {
+        let mut status: fmi2Status = 99;
+        assert_eq!(fmi2GetStatus(c, kind, &mut status), DISCARD, "fmi2GetStatus kind {kind}");
+        assert_eq!(status, 99, "a discarded query writes nothing");
+        step(c);
+        let mut int = -1;
+        assert_eq!(fmi2GetIntegerStatus(c, kind, &mut int), DISCARD, "fmi2GetIntegerStatus kind {kind}");
+        step(c);
+        let mut string: fmi2String = std::ptr::null();
+        assert_eq!(fmi2GetStringStatus(c, kind, &mut string), DISCARD, "fmi2GetStringStatus kind {kind}");
+        assert!(string.is_null());
+        step(c);
+        if kind != fmi2StatusKind_fmi2LastSuccessfulTime {
+            let mut real = -1.0;
+            assert_eq!(fmi2GetRealStatus(c, kind, &mut real), DISCARD, "fmi2GetRealStatus kind {kind}");
+            assert_eq!(real, -1.0);
+            step(c);
+        }
+        if kind != fmi2StatusKind_fmi2Terminated {
+            let mut boolean = -1;
+            assert_eq!(fmi2GetBooleanStatus(c, kind, &mut boolean), DISCARD, "fmi2GetBooleanStatus kind {kind}");
+            assert_eq!(boolean, -1);
+            step(c);
+        }
+    }
+    // Each discard says which query and why.
+    assert_logged(name, "fmi2GetStatus: fmi2DoStepStatus cannot be given: steps are synchronous");
+    assert_logged(name, "fmi2GetStringStatus: fmi2PendingStatus cannot be given: steps are synchronous");
+    assert_logged(name, "fmi2GetIntegerStatus: fmi2LastSuccessfulTime cannot be given: it is a Real status");
+    assert_logged(name, "fmi2GetRealStatus: fmi2Terminated cannot be given: it is a Boolean status");
+    assert_logged(name, "fmi2GetBooleanStatus: status kind 77 (not an fmi2StatusKind) cannot be given");
+    assert!(!logs(name).iter().any(|l| l.contains("not allowed in phase Error")), "{:?}", logs(name));
+    // The answerable ones.
+    let mut t = -1.0;
+    assert_eq!(fmi2GetRealStatus(c, fmi2StatusKind_fmi2LastSuccessfulTime, &mut t), OK);
+    // The end of the last step, as the FMU takes it: its currentCommunicationPoint plus h.
+    let last_end = (steps - 1) as f64 * 1e-4 + 1e-4;
+    assert_eq!(t, last_end, "fmi2LastSuccessfulTime is the end of the last step ({steps} steps)");
+    let mut terminated = -1;
+    assert_eq!(fmi2GetBooleanStatus(c, fmi2StatusKind_fmi2Terminated, &mut terminated), OK);
+    assert_eq!(terminated, fmi2False as i32, "the slave never asks to terminate");
+    // After fmi2Terminate the last time is still there.
+    let mut after = -1.0;
+    assert_eq!(fmi2Reset(c), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    assert_eq!(fmi2DoStep(c, 0.0, 1e-4, 1), OK);
+    assert_eq!(fmi2Terminate(c), OK);
+    assert_eq!(fmi2GetRealStatus(c, fmi2StatusKind_fmi2LastSuccessfulTime, &mut after), OK, "also when Terminated");
+    assert_eq!(after, 1e-4);
+    // A NULL value pointer is a caller error, not a status without an answer.
+    assert_eq!(fmi2GetRealStatus(c, fmi2StatusKind_fmi2LastSuccessfulTime, std::ptr::null_mut()), ERR);
+    assert_logged(name, "fmi2GetRealStatus: value is NULL");
+    fmi2FreeInstance(c);
+}
+
+/// Bounded work per call: a step needing more RK4 sub-steps than the stated bound is refused at
+/// once with a log line naming h, max_step and the bound; a state saved before brings the
+/// instance back. max_step that is not a positive normal number is refused at fmi2SetReal.
+#[test]
+fn steps_needing_unbounded_work_are_refused_at_once() {
+    use gearfmu::dynamics::fmu::MAX_SUBSTEPS_LUMPED;
+    let name = "bounded";
+    let reference = initialized("bounded-reference", None);
+    let expected = run(reference, 0.0, 10, 1e-4);
+    let c = initialized(name, None);
+    assert_eq!(get(c, "max_step"), 1e-5);
+    assert_eq!(run(c, 0.0, 5, 1e-4)[..], expected[..5]);
+    let saved = state_of(c);
+    // h = 1e9 s: 1e14 sub-steps. One above the bound: refused too, and nothing is computed.
+    let over = (MAX_SUBSTEPS_LUMPED + 1.0) * 1e-5;
+    for h in [1e9, over] {
+        let started = std::time::Instant::now();
+        assert_eq!(fmi2DoStep(c, 5e-4, h, 1), ERR, "h = {h}");
+        assert!(started.elapsed().as_secs_f64() < 0.1, "refused at once, took {:?}", started.elapsed());
+        assert_logged(
+            name,
+            &format!("fmi2DoStep: communicationStepSize h = {h:e} s with max_step = 1e-5 s needs {:e} RK4 sub-steps, more than the bound of 4e7 per call", (h / 1e-5f64).ceil()),
+        );
+        assert_eq!(fmi2SetFMUstate(c, saved), OK);
+    }
+    assert_eq!(run(c, 5e-4, 5, 1e-4)[..], expected[5..], "the run goes on from the saved state");
+    // A long step inside the bound (1e4 sub-steps) is done.
+    assert_eq!(fmi2DoStep(c, 10e-4, 0.1, 1), OK);
+    fmi2FreeInstance(c);
+    fmi2FreeInstance(reference);
+
+    // max_step at fmi2SetReal: zero, negative, subnormal, NaN and ±inf refused with the reason.
+    let c = instantiate("max-step");
+    for bad in [0.0, -0.0, -1e-5, 1e-310, f64::MIN_POSITIVE / 2.0] {
+        assert_eq!(set(c, "max_step", bad), ERR, "max_step = {bad:e}");
+        assert_logged(
+            "max-step",
+            &format!("max_step must be a finite, positive, normal number of seconds, got {bad:e}"),
+        );
+        assert_eq!(fmi2Reset(c), OK);
+    }
+    for bad in [f64::NAN, f64::INFINITY] {
+        assert_eq!(set(c, "max_step", bad), ERR);
+        assert_logged("max-step", &format!("value {bad} is not finite"));
+        assert_eq!(fmi2Reset(c), OK);
+    }
+    // 1e-300 is a normal number: accepted, and then every step is refused by the bound.
+    assert_eq!(set(c, "max_step", 1e-300), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    assert_eq!(fmi2DoStep(c, 0.0, 1e-4, 1), ERR);
+    assert_logged("max-step", "max_step = 1e-300 s needs 1");
+    assert_logged("max-step", "e296 RK4 sub-steps, more than the bound of 4e7 per call");
+    fmi2FreeInstance(c);
+}
+
+/// The time check scales with the step and the spacing of t, not with |t|: at t = 1e9 s a
+/// whole second (or 1e-5 s) off is refused; a master's grid t0 + k·h is accepted.
+#[test]
+fn communication_point_tolerance_scales_with_the_step_not_with_t() {
+    let name = "late-time";
+    let c = instantiate(name);
+    let t0 = 1e9;
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, t0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    let start = state_of(c);
+    for off in [1.0, -1.0, 1e-5] {
+        assert_eq!(fmi2DoStep(c, t0 + off, 1e-3, 1), ERR, "off by {off} s at t = 1e9 s");
+        assert_logged(name, &format!("currentCommunicationPoint {} is not the FMU's time 1000000000", t0 + off));
+        assert_eq!(fmi2SetFMUstate(c, start), OK, "the instance recovers from a saved state");
+    }
+    // The grid t0 + k·h (rounded differently from the FMU's t + h) is accepted for 1000 steps.
+    for k in 0..1000 {
+        assert_eq!(fmi2DoStep(c, t0 + k as f64 * 1e-3, 1e-3, 1), OK, "step {k}");
+    }
+    let mut t = 0.0;
+    assert_eq!(fmi2GetRealStatus(c, fmi2StatusKind_fmi2LastSuccessfulTime, &mut t), OK);
+    assert!((t - (t0 + 1.0)).abs() <= 4.0 * f64::EPSILON * t0, "t = {t}");
+    fmi2FreeInstance(c);
+
+    // At t = 0 a mismatch of a millionth of the step is refused too.
+    let c = initialized("early-time", None);
+    assert_eq!(fmi2DoStep(c, 1e-10, 1e-4, 1), ERR);
+    assert_logged("early-time", "currentCommunicationPoint 0.0000000001 is not the FMU's time 0");
+    fmi2FreeInstance(c);
+}
+
+/// The serialized FMU state: header (magic, version, GUID), exact length, SHA-256.
+#[test]
+fn serialized_state_has_magic_version_guid_and_checksum() {
+    use sha2::{Digest, Sha256};
+    let (_, guid) = resources();
+    let c = initialized("header", None);
+    run(c, 0.0, 5, 1e-4);
+    let state = state_of(c);
+    let bytes = serialize(c, state);
+    assert_eq!(&bytes[..8], b"GFMUSTAT");
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 2, "format version");
+    let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[16..16 + n], guid.as_bytes());
+    let m = u64::from_le_bytes(bytes[16 + n..24 + n].try_into().unwrap()) as usize;
+    assert_eq!(bytes.len(), 24 + n + m + 32);
+    assert_eq!(&bytes[24 + n + m..], Sha256::digest(&bytes[..24 + n + m]).as_slice());
+    // Trailing bytes and a truncated state are refused, each with its reason.
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert_eq!(deserialize(c, &longer).0, ERR);
+    assert_logged("header", "has 1 trailing bytes after its checksum");
+    assert_eq!(deserialize(c, &bytes[..bytes.len() - 1]).0, ERR);
+    assert_logged("header", "serialized FMU state is truncated");
+    assert_eq!(fmi2SetFMUstate(c, state), OK);
+    assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), OK);
+    let mut s = state;
+    assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+    fmi2FreeInstance(c);
+}
+
+/// Every single-bit flip of a serialized state is refused (with a log line), and the instance
+/// keeps its state and recovers with a good one.
+#[test]
+fn every_single_bit_flip_of_a_serialized_state_is_refused() {
+    let name = "bit-flips";
+    let c = initialized(name, None);
+    run(c, 0.0, 7, 1e-4);
+    let good = state_of(c);
+    let bytes = serialize(c, good);
+    let outputs = OUTPUTS.map(|o| get(c, o));
+    let n_lines = logs(name).len();
+    let mut refused = 0;
+    for bit in 0..bytes.len() * 8 {
+        let mut flipped = bytes.clone();
+        flipped[bit / 8] ^= 1 << (bit % 8);
+        let (status, mut state) = deserialize(c, &flipped);
+        if status == OK {
+            // Accepted only if it decodes to the identical state (it never does with the checksum).
+            let again = serialize(c, state);
+            assert_eq!(again, bytes, "bit {bit}: a flipped state was accepted and decodes to a different state");
+            assert_eq!(fmi2FreeFMUstate(c, &mut state), OK);
+        } else {
+            assert_eq!(status, ERR, "bit {bit}");
+            assert!(state.is_null(), "bit {bit}: a refused state must not be handed out");
+            refused += 1;
+        }
+    }
+    assert_eq!(refused, bytes.len() * 8, "all {} flips refused", bytes.len() * 8);
+    assert_eq!(logs(name).len() - n_lines, refused, "one log line per refusal");
+    assert_logged(name, "its SHA-256 checksum does not match");
+    assert_logged(name, "wrong magic");
+    assert_logged(name, "format version");
+    assert_eq!(OUTPUTS.map(|o| get(c, o)), outputs, "the instance keeps its state");
+    assert_eq!(fmi2SetFMUstate(c, good), OK);
+    assert_eq!(fmi2DoStep(c, 7e-4, 1e-4, 1), OK);
+    let mut s = good;
+    assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+    fmi2FreeInstance(c);
+}
+
+/// A helical pair's state is refused by the spur FMU (another GUID), with both GUIDs named.
+#[test]
+fn a_state_from_another_fmu_is_refused() {
+    let (hdir, hguid) = helical_resources();
+    let helical = instantiate_at("helical", hdir, hguid);
+    assert!(!helical.is_null(), "{:?}", logs("helical"));
+    assert_eq!(fmi2SetupExperiment(helical, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(helical), OK);
+    assert_eq!(fmi2ExitInitializationMode(helical), OK);
+    run(helical, 0.0, 5, 1e-4);
+    let hstate = state_of(helical);
+    let hbytes = serialize(helical, hstate);
+    let spur = initialized("spur-gets-helical", None);
+    run(spur, 0.0, 5, 1e-4);
+    let outputs = OUTPUTS.map(|o| get(spur, o));
+    let (status, state) = deserialize(spur, &hbytes);
+    assert_eq!(status, ERR);
+    assert!(state.is_null());
+    let (_, sguid) = resources();
+    assert_logged(
+        "spur-gets-helical",
+        &format!("serialized FMU state is from another FMU: GUID {hguid} (this FMU's is {sguid})"),
+    );
+    assert_eq!(OUTPUTS.map(|o| get(spur, o)), outputs);
+    // The helical instance itself takes it back.
+    let (status, mut back) = deserialize(helical, &hbytes);
+    assert_eq!(status, OK);
+    assert_eq!(fmi2SetFMUstate(helical, back), OK);
+    assert_eq!(fmi2FreeFMUstate(helical, &mut back), OK);
+    let mut h = hstate;
+    assert_eq!(fmi2FreeFMUstate(helical, &mut h), OK);
+    fmi2FreeInstance(helical);
+    fmi2FreeInstance(spur);
+}
+
+/// A well-formed state (right GUID, right checksum) whose parameters fmi2SetReal would refuse is
+/// refused at fmi2DeSerializeFMUstate and at fmi2SetFMUstate, with the SetReal reason; the
+/// instance keeps its previous state and recovers with a good one.
+#[test]
+fn restored_parameters_are_revalidated() {
+    use gearfmu::dynamics::fmu::GearPairState;
+    use gearfmu::fmi2::instance::{deserialize_snapshot, serialize_snapshot, Snapshot};
+    let (_, guid) = resources();
+    let name = "revalidate";
+    let c = initialized(name, None);
+    run(c, 0.0, 5, 1e-4);
+    let good = state_of(c);
+    let good_bytes = serialize(c, good);
+    let outputs = OUTPUTS.map(|o| get(c, o));
+    let decoded: Snapshot<GearPairState> = deserialize_snapshot(&good_bytes, guid).unwrap();
+    type Edit = fn(&mut Snapshot<GearPairState>);
+    let cases: [(Edit, &str); 8] = [
+        (|s| s.state.params.inertia_1_kgm2 = -1.0, "inertia_1 must be > 0, got -1"),
+        (|s| s.state.params.inertia_2_kgm2 = 0.0, "inertia_2 must be > 0, got 0"),
+        (|s| s.state.max_step_s = 0.0, "max_step must be a finite, positive, normal number of seconds, got 0e0"),
+        (|s| s.state.max_step_s = 1e-320, "max_step must be a finite, positive, normal number of seconds, got 1e-320"),
+        (|s| s.state.params.mesh_damping_ratio = 1.5, "mesh_damping_ratio must be in [0, 1), got 1.5"),
+        (|s| s.state.torques_nm[0] = f64::NAN, "tau_1/tau_2 holds a non-finite value NaN"),
+        (|s| s.state.mech.omega_1 = f64::INFINITY, "the lumped state holds a non-finite value inf"),
+        (|s| s.time = f64::NAN, "the FMU state's time NaN is not finite"),
+    ];
+    for (edit, reason) in cases {
+        let mut bad = decoded.clone();
+        edit(&mut bad);
+        // Through the serialized form: refused at deserialization.
+        let bytes = serialize_snapshot(&bad, guid).unwrap();
+        let (status, state) = deserialize(c, &bytes);
+        assert_eq!(status, ERR, "{reason}");
+        assert!(state.is_null());
+        assert_logged(name, &format!("fmi2DeSerializeFMUstate: the FMU state is refused: {reason}"));
+        assert_eq!(OUTPUTS.map(|o| get(c, o)), outputs, "{reason}: the instance keeps its state");
+        // As an FMU state in memory: refused at fmi2SetFMUstate.
+        let raw = Box::into_raw(Box::new(bad)) as fmi2FMUstate;
+        assert_eq!(fmi2SetFMUstate(c, raw), ERR, "{reason}");
+        assert_logged(name, &format!("fmi2SetFMUstate: the FMU state is refused: {reason}"));
+        assert_eq!(OUTPUTS.map(|o| get(c, o)), outputs, "{reason}: the instance keeps its state");
+        let mut raw = raw;
+        assert_eq!(fmi2FreeFMUstate(c, &mut raw), OK);
+        // Recovery: the good state, then a step.
+        assert_eq!(fmi2SetFMUstate(c, good), OK);
+        assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), OK);
+        assert_eq!(fmi2SetFMUstate(c, good), OK);
+    }
+    let mut s = good;
+    assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+    fmi2FreeInstance(c);
 }

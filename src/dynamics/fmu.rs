@@ -211,6 +211,52 @@ impl GearPairFmu {
     }
 }
 
+/// The most RK4 sub-steps one fmi2DoStep may take, per model kind: about 10 s of work per call
+/// on the development machine (2 cores shared, load ≈ 3), measured through the FMU (fmpy,
+/// `fmi2DoStep` with h = 10⁴·max_step, Kurokawa spur pair, 185 N·m against its static load,
+/// five calls each: `scripts/substep_cost.py`):
+/// - lumped: 0.22 µs per sub-step (0.217–0.236) → 4·10⁷ sub-steps ≈ 9 s (h ≤ 400 s at the
+///   default max_step 1e-5 s);
+/// - PMOR-Hertz: 104 µs per sub-step (103–108) → 10⁵ sub-steps ≈ 10 s (h ≤ 0.36 s at the spur
+///   model's max_step 3.6e-6 s).
+///
+/// A longer communication step is refused before any work, naming h, max_step and the bound.
+pub const MAX_SUBSTEPS_LUMPED: f64 = 4e7;
+pub const MAX_SUBSTEPS_PMOR: f64 = 1e5;
+
+/// max_step: finite, > 0 and normal (a subnormal step is a hang, not a setting).
+fn max_step(value: f64) -> Result<f64, String> {
+    if value.is_finite() && value > 0.0 && value.is_normal() {
+        Ok(value)
+    } else {
+        Err(format!("max_step must be a finite, positive, normal number of seconds, got {value:e}"))
+    }
+}
+
+fn finite(name: &str, values: &[f64]) -> Result<(), String> {
+    match values.iter().find(|x| !x.is_finite()) {
+        Some(x) => Err(format!("{name} holds a non-finite value {x}")),
+        None => Ok(()),
+    }
+}
+
+impl GearPairFmu {
+    fn max_substeps(&self) -> f64 {
+        match &self.physics {
+            Physics::Lumped(_) => MAX_SUBSTEPS_LUMPED,
+            Physics::PmorHertz { .. } => MAX_SUBSTEPS_PMOR,
+        }
+    }
+
+    fn mesh_damping_ratio(value: f64) -> Result<f64, String> {
+        if (0.0..1.0).contains(&value) {
+            Ok(value)
+        } else {
+            Err(format!("mesh_damping_ratio must be in [0, 1), got {value}"))
+        }
+    }
+}
+
 fn positive(name: &str, value: f64) -> Result<f64, String> {
     if value > 0.0 {
         Ok(value)
@@ -258,15 +304,10 @@ impl Model for GearPairFmu {
             Var::Phi2Start => s.start.theta_2 = value,
             Var::W1Start => s.start.omega_1 = value,
             Var::W2Start => s.start.omega_2 = value,
-            Var::MaxStep => s.max_step_s = positive("max_step", value)?,
+            Var::MaxStep => s.max_step_s = max_step(value)?,
             Var::Inertia1 => s.params.inertia_1_kgm2 = self.inertia("inertia_1", 0, value)?,
             Var::Inertia2 => s.params.inertia_2_kgm2 = self.inertia("inertia_2", 1, value)?,
-            Var::MeshDampingRatio => {
-                if !(0.0..1.0).contains(&value) {
-                    return Err(format!("mesh_damping_ratio must be in [0, 1), got {value}"));
-                }
-                s.params.mesh_damping_ratio = value
-            }
+            Var::MeshDampingRatio => s.params.mesh_damping_ratio = Self::mesh_damping_ratio(value)?,
             other => return Err(format!("{} is an output and cannot be set", other.name())),
         }
         // Until initialization ends the mechanical state follows the start values.
@@ -346,7 +387,56 @@ impl Model for GearPairFmu {
         Ok(())
     }
 
+    fn check_step(&self, s: &GearPairState, h: f64) -> Result<(), String> {
+        let max_step_s = max_step(s.max_step_s)?;
+        let n = (h / max_step_s).ceil();
+        let bound = self.max_substeps();
+        if n <= bound {
+            Ok(())
+        } else {
+            Err(format!(
+                "communicationStepSize h = {h:e} s with max_step = {max_step_s:e} s needs {n:e} RK4 sub-steps, more than the bound of {bound:e} per call (about 10 s of work); take shorter communication steps or a larger max_step"
+            ))
+        }
+    }
+
+    fn check_state(&self, s: &GearPairState) -> Result<(), String> {
+        // The parameters, with the rules of set_real.
+        max_step(s.max_step_s)?;
+        self.inertia("inertia_1", 0, s.params.inertia_1_kgm2)?;
+        self.inertia("inertia_2", 1, s.params.inertia_2_kgm2)?;
+        Self::mesh_damping_ratio(s.params.mesh_damping_ratio)?;
+        // Inputs, start values and the mechanical state: finite (set_reals refuses the rest).
+        finite("tau_1/tau_2", &s.torques_nm)?;
+        let l = |m: &LumpedState| [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j];
+        finite("the start values", &l(&s.start))?;
+        finite("the lumped state", &l(&s.mech))?;
+        match (&self.physics, &s.pmor) {
+            (Physics::Lumped(_), Some(_)) => Err("a PMOR-Hertz state cannot be restored into the lumped model".into()),
+            (Physics::Lumped(_), None) | (Physics::PmorHertz { .. }, None) => Ok(()),
+            (Physics::PmorHertz { model, .. }, Some(p)) => {
+                for i in 0..2 {
+                    let n = model.gears[i].elastic_size();
+                    if p.eta[i].len() != n || p.eta_dot[i].len() != n {
+                        return Err(format!(
+                            "gear {}'s elastic state has {}/{} coordinates; this model has {n}",
+                            i + 1,
+                            p.eta[i].len(),
+                            p.eta_dot[i].len()
+                        ));
+                    }
+                    finite("the PMOR-Hertz elastic state", &p.eta[i])?;
+                    finite("the PMOR-Hertz elastic state", &p.eta_dot[i])?;
+                }
+                finite("the PMOR-Hertz rigid state", &[p.theta, p.omega].concat())?;
+                finite("the PMOR-Hertz energy terms", &[p.input_work_j, p.dissipated_j])
+            }
+        }
+    }
+
     fn do_step(&self, s: &mut GearPairState, h: f64) -> Result<(), String> {
+        // The FMI layer checks before calling; checked again so no caller can start unbounded work.
+        self.check_step(s, h)?;
         let mesh = match &self.physics {
             Physics::Lumped(mesh) => mesh,
             Physics::PmorHertz { model, place } => {

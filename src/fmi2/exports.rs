@@ -2,7 +2,7 @@
 //! arguments, run the body inside [`guard`] (NULL check, allowed-phase check, panic catch), and
 //! hand over to [`Instance`]. The model type is chosen once, at the crate root (`crate::FmuModel`).
 
-use super::instance::{allowed, deserialize_snapshot, serialize_snapshot, Instance, Snapshot, ERROR, OK};
+use super::instance::{allowed, Instance, Snapshot, ERROR, OK};
 use super::{resource_uri::resource_path, Model};
 use fmi_sys::fmi2::*;
 use std::ffi::{CStr, CString};
@@ -111,7 +111,8 @@ pub extern "C" fn fmi2Instantiate(
         let loaded = resource_path(&uri).and_then(|dir| M::load(&dir, &guid));
         match loaded {
             Ok(model) => {
-                Box::into_raw(Box::new(Inst::new(name.clone(), model, callbacks, logging_on != 0))) as fmi2Component
+                Box::into_raw(Box::new(Inst::new(name.clone(), guid.clone(), model, callbacks, logging_on != 0)))
+                    as fmi2Component
             }
             Err(e) => refuse(format!("fmi2Instantiate: {e}")),
         }
@@ -316,8 +317,12 @@ pub extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2
             return i.fail("fmi2SetFMUstate", "FMUstate is NULL");
         }
         let snapshot = unsafe { &*(state as *const FmuState) };
-        i.restore(snapshot);
-        OK
+        // A refused state changes nothing but the phase (Error, from which SetFMUstate with a
+        // good state or Reset recovers).
+        match i.restore(snapshot) {
+            Ok(()) => OK,
+            Err(e) => i.fail("fmi2SetFMUstate", &e),
+        }
     })
 }
 
@@ -338,7 +343,8 @@ fn serialized(i: &mut Inst, function: &str, state: fmi2FMUstate) -> Result<Vec<u
     if state.is_null() {
         return Err(i.fail(function, "FMUstate is NULL"));
     }
-    serialize_snapshot(unsafe { &*(state as *const FmuState) }).map_err(|e| i.fail(function, &e))
+    let bytes = i.serialize(unsafe { &*(state as *const FmuState) });
+    bytes.map_err(|e| i.fail(function, &e))
 }
 
 #[no_mangle]
@@ -393,7 +399,7 @@ pub extern "C" fn fmi2DeSerializeFMUstate(
         let (Some(bytes), false) = (slice(bytes as *const u8, size), state.is_null()) else {
             return i.fail("fmi2DeSerializeFMUstate", "serializedState or FMUstate is NULL");
         };
-        match deserialize_snapshot::<<M as Model>::State>(bytes) {
+        match i.deserialize(bytes) {
             Ok(snapshot) => {
                 unsafe {
                     if !(*state).is_null() {
@@ -465,46 +471,90 @@ pub extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     guard(c, "fmi2CancelStep", 0, |_| ERROR)
 }
 
-fn status_query(c: fmi2Component, function: &str) -> fmi2Status {
-    guard(c, function, allowed::GET_STATUS, |i| i.fail(function, "no asynchronous step: no status to report"))
+// The status kinds, under names that may appear in patterns.
+const DO_STEP_STATUS: fmi2StatusKind = fmi2StatusKind_fmi2DoStepStatus;
+const PENDING_STATUS: fmi2StatusKind = fmi2StatusKind_fmi2PendingStatus;
+const LAST_SUCCESSFUL_TIME: fmi2StatusKind = fmi2StatusKind_fmi2LastSuccessfulTime;
+const TERMINATED: fmi2StatusKind = fmi2StatusKind_fmi2Terminated;
+
+/// The name of a status kind, for log lines.
+fn kind_name(kind: fmi2StatusKind) -> String {
+    match kind {
+        DO_STEP_STATUS => "fmi2DoStepStatus".into(),
+        PENDING_STATUS => "fmi2PendingStatus".into(),
+        LAST_SUCCESSFUL_TIME => "fmi2LastSuccessfulTime".into(),
+        TERMINATED => "fmi2Terminated".into(),
+        other => format!("status kind {other} (not an fmi2StatusKind)"),
+    }
+}
+
+/// The status queries (FMI 2.0.4 §4.2.3). Steps here are synchronous: fmi2DoStep never returns
+/// fmi2Pending, so fmi2DoStepStatus and fmi2PendingStatus have no answer; the answerable ones
+/// are fmi2LastSuccessfulTime (Real) and fmi2Terminated (Boolean). A kind without an answer
+/// for the queried type is fmi2Discard with a log line, and the instance stays as it was.
+fn status_query<T>(
+    c: fmi2Component,
+    function: &str,
+    kind: fmi2StatusKind,
+    value: *mut T,
+    answer: impl FnOnce(&Inst, fmi2StatusKind) -> Result<T, String>,
+) -> fmi2Status {
+    guard(c, function, allowed::GET_STATUS, |i| {
+        if value.is_null() {
+            return i.fail(function, "value is NULL");
+        }
+        match answer(i, kind) {
+            Ok(v) => {
+                unsafe { *value = v };
+                OK
+            }
+            Err(why) => i.discard(function, &format!("{} cannot be given: {why}", kind_name(kind))),
+        }
+    })
+}
+
+const SYNCHRONOUS: &str = "steps are synchronous (fmi2DoStep never returns fmi2Pending)";
+
+fn wrong_type(kind: fmi2StatusKind, type_name: &str) -> String {
+    match kind {
+        DO_STEP_STATUS | PENDING_STATUS => SYNCHRONOUS.into(),
+        LAST_SUCCESSFUL_TIME => "it is a Real status (fmi2GetRealStatus)".into(),
+        TERMINATED => "it is a Boolean status (fmi2GetBooleanStatus)".into(),
+        _ => format!("unknown kind for the {type_name} status"),
+    }
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2GetStatus(c: fmi2Component, _kind: fmi2StatusKind, _value: *mut fmi2Status) -> fmi2Status {
-    status_query(c, "fmi2GetStatus")
+pub extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
+    status_query(c, "fmi2GetStatus", kind, value, |_, kind| Err(wrong_type(kind, "fmi2Status")))
 }
 
 #[no_mangle]
 pub extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
-    // fmi2LastSuccessfulTime is the one real status a synchronous slave can answer.
-    guard(c, "fmi2GetRealStatus", allowed::GET_STATUS, |i| {
-        if kind != fmi2StatusKind_fmi2LastSuccessfulTime || value.is_null() {
-            return i.fail("fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available");
-        }
-        unsafe { *value = i.time };
-        OK
+    status_query(c, "fmi2GetRealStatus", kind, value, |i, kind| match kind {
+        // The end of the last completed communication step: the instance's time.
+        LAST_SUCCESSFUL_TIME => Ok(i.time),
+        _ => Err(wrong_type(kind, "Real")),
     })
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2GetIntegerStatus(
-    c: fmi2Component,
-    _kind: fmi2StatusKind,
-    _value: *mut fmi2Integer,
-) -> fmi2Status {
-    status_query(c, "fmi2GetIntegerStatus")
+pub extern "C" fn fmi2GetIntegerStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Integer) -> fmi2Status {
+    // FMI 2.0 defines no Integer status.
+    status_query(c, "fmi2GetIntegerStatus", kind, value, |_, kind| Err(wrong_type(kind, "Integer")))
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2GetBooleanStatus(
-    c: fmi2Component,
-    _kind: fmi2StatusKind,
-    _value: *mut fmi2Boolean,
-) -> fmi2Status {
-    status_query(c, "fmi2GetBooleanStatus")
+pub extern "C" fn fmi2GetBooleanStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Boolean) -> fmi2Status {
+    status_query(c, "fmi2GetBooleanStatus", kind, value, |_, kind| match kind {
+        // "fmi2True if the slave wants to terminate the simulation": this one never asks to; it
+        // refuses a step with fmi2Error, never with fmi2Discard.
+        TERMINATED => Ok(fmi2False as fmi2Boolean),
+        _ => Err(wrong_type(kind, "Boolean")),
+    })
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2GetStringStatus(c: fmi2Component, _kind: fmi2StatusKind, _value: *mut fmi2String) -> fmi2Status {
-    status_query(c, "fmi2GetStringStatus")
+pub extern "C" fn fmi2GetStringStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2String) -> fmi2Status {
+    status_query(c, "fmi2GetStringStatus", kind, value, |_, kind| Err(wrong_type(kind, "String")))
 }

@@ -5,6 +5,7 @@
 use super::{Model, Phase};
 use fmi_sys::fmi2::*;
 use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 use std::ffi::{CStr, CString};
 
 /// Allowed phases per function (FMI 2.0.4, Table "state machine of calling sequence", CS).
@@ -28,7 +29,9 @@ pub mod allowed {
 }
 
 /// Log categories declared in modelDescription.xml.
-pub const LOG_CATEGORIES: [&str; 3] = ["logStatusError", "logStatusWarning", "logEvents"];
+pub const LOG_CATEGORIES: [&str; 4] = ["logStatusError", "logStatusWarning", "logEvents", "logStatusDiscard"];
+/// Index of "logStatusDiscard" in [`LOG_CATEGORIES`].
+const LOG_DISCARD: usize = 3;
 
 /// What an FMU state holds: the model's state, the time and the phase it was taken in.
 #[derive(Clone, Serialize, Deserialize)]
@@ -41,6 +44,8 @@ pub struct Snapshot<S> {
 
 pub struct Instance<M: Model> {
     pub name: CString,
+    /// The GUID the instance was created with; every serialized FMU state carries it.
+    pub guid: String,
     callbacks: fmi2CallbackFunctions,
     logging_on: bool,
     enabled_categories: [bool; LOG_CATEGORIES.len()],
@@ -54,12 +59,14 @@ pub struct Instance<M: Model> {
 pub type Status = fmi2Status;
 pub const OK: Status = fmi2Status_fmi2OK;
 pub const ERROR: Status = fmi2Status_fmi2Error;
+pub const DISCARD: Status = fmi2Status_fmi2Discard;
 
 impl<M: Model> Instance<M> {
-    pub fn new(name: CString, model: M, callbacks: fmi2CallbackFunctions, logging_on: bool) -> Self {
+    pub fn new(name: CString, guid: String, model: M, callbacks: fmi2CallbackFunctions, logging_on: bool) -> Self {
         let state = model.initial_state();
         Instance {
             name,
+            guid,
             callbacks,
             logging_on,
             enabled_categories: [true; LOG_CATEGORIES.len()],
@@ -72,9 +79,10 @@ impl<M: Model> Instance<M> {
     }
 
     /// Passes one message to the master's logger, always with "%s" as the format so that a
-    /// message containing '%' is never interpreted. Errors are logged even with logging off.
+    /// message containing '%' is never interpreted. Errors and discards (a refusal the master
+    /// must be able to explain) are logged even with logging off.
     pub fn log(&self, status: Status, category: usize, message: &str) {
-        let wanted = status == ERROR || (self.logging_on && self.enabled_categories[category]);
+        let wanted = status == ERROR || status == DISCARD || (self.logging_on && self.enabled_categories[category]);
         if let (true, Some(logger)) = (wanted, self.callbacks.logger) {
             let text = CString::new(message.replace('\0', " ")).unwrap_or_default();
             let category = CString::new(LOG_CATEGORIES[category]).unwrap_or_default();
@@ -99,6 +107,13 @@ impl<M: Model> Instance<M> {
             self.phase = Phase::Error;
         }
         ERROR
+    }
+
+    /// A request the instance cannot honour but that leaves it intact (fmi2Discard): logged, the
+    /// phase unchanged.
+    pub fn discard(&self, function: &str, message: &str) -> Status {
+        self.log(DISCARD, LOG_DISCARD, &format!("{function}: {message}"));
+        DISCARD
     }
 
     /// The one guard: is `function` allowed in the current phase?
@@ -155,17 +170,30 @@ impl<M: Model> Instance<M> {
 
     pub fn do_step(&mut self, current: f64, h: f64) -> Status {
         const F: &str = "fmi2DoStep";
-        let tolerance = 1e-9 * self.time.abs().max(1.0);
-        if !current.is_finite() || (current - self.time).abs() > tolerance {
-            return self.fail(F, &format!("currentCommunicationPoint {current} is not the FMU's time {}", self.time));
-        }
         if !(h.is_finite() && h > 0.0) {
             return self.fail(F, &format!("communicationStepSize must be finite and > 0, got {h}"));
         }
+        // The master's time may differ from ours by rounding only: a billionth of the step plus
+        // a few ulps of t (never a fraction of |t|, which at t = 1e9 s would be a whole second).
+        let tolerance = time_tolerance(self.time, h);
+        if !current.is_finite() || (current - self.time).abs() > tolerance {
+            return self.fail(
+                F,
+                &format!(
+                    "currentCommunicationPoint {current} is not the FMU's time {} (differs by {:e} s, tolerance {tolerance:e} s)",
+                    self.time,
+                    current - self.time
+                ),
+            );
+        }
         if let Some(stop) = self.stop_time {
-            if current + h > stop + 1e-9 * stop.abs().max(1.0) {
+            if current + h > stop + time_tolerance(stop, h) {
                 return self.fail(F, &format!("step to {} goes past stopTime {stop}", current + h));
             }
+        }
+        // Refuse, before any work, a step the model cannot finish in bounded time.
+        if let Err(e) = self.model.check_step(&self.state, h) {
+            return self.fail(F, &e);
         }
         match self.model.do_step(&mut self.state, h) {
             Ok(()) => {
@@ -223,11 +251,43 @@ impl<M: Model> Instance<M> {
         Snapshot { state: self.state.clone(), time: self.time, stop_time: self.stop_time, phase: self.phase }
     }
 
-    pub fn restore(&mut self, snapshot: &Snapshot<M::State>) {
+    /// Checks a snapshot before it may replace the instance's state: the time and phase must be
+    /// ones this FMU can be in, and the model's parameters pass the rules fmi2SetReal applies.
+    pub fn check_snapshot(&self, snapshot: &Snapshot<M::State>) -> Result<(), String> {
+        if !snapshot.time.is_finite() {
+            return Err(format!("the FMU state's time {} is not finite", snapshot.time));
+        }
+        if let Some(stop) = snapshot.stop_time {
+            if !(stop.is_finite() && stop >= snapshot.time - time_tolerance(stop, 0.0)) {
+                return Err(format!("the FMU state's stopTime {stop} is not finite and ≥ its time {}", snapshot.time));
+            }
+        }
+        if snapshot.phase == Phase::Fatal {
+            return Err("the FMU state was taken in phase Fatal, which no FMU state can be".into());
+        }
+        self.model.check_state(&snapshot.state)
+    }
+
+    /// Restores a snapshot after [`Self::check_snapshot`]; a refused one changes nothing.
+    pub fn restore(&mut self, snapshot: &Snapshot<M::State>) -> Result<(), String> {
+        self.check_snapshot(snapshot).map_err(|e| format!("the FMU state is refused: {e}"))?;
         self.state = snapshot.state.clone();
         self.time = snapshot.time;
         self.stop_time = snapshot.stop_time;
         self.phase = snapshot.phase;
+        Ok(())
+    }
+
+    /// The serialized form of an FMU state of this instance (see [`STATE_MAGIC`]).
+    pub fn serialize(&self, snapshot: &Snapshot<M::State>) -> Result<Vec<u8>, String> {
+        serialize_snapshot(snapshot, &self.guid)
+    }
+
+    /// Decodes a serialized FMU state and checks it as [`Self::restore`] would.
+    pub fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot<M::State>, String> {
+        let snapshot = deserialize_snapshot(bytes, &self.guid)?;
+        self.check_snapshot(&snapshot).map_err(|e| format!("the FMU state is refused: {e}"))?;
+        Ok(snapshot)
     }
 
     pub fn reset(&mut self) {
@@ -238,18 +298,91 @@ impl<M: Model> Instance<M> {
     }
 }
 
-/// The serialized FMU state: a version tag, then the snapshot in postcard.
-const STATE_FORMAT: &[u8; 8] = b"GFMUST01";
+/// How far the master's time may be from the instance's: a billionth of the step h plus four
+/// machine epsilons of |t| (2 to 4 ulps of t): the rounding of a sum of steps, never a fraction
+/// of t itself.
+pub fn time_tolerance(t: f64, h: f64) -> f64 {
+    1e-9 * h + 4.0 * f64::EPSILON * t.abs()
+}
 
-pub fn serialize_snapshot<S: Serialize>(snapshot: &Snapshot<S>) -> Result<Vec<u8>, String> {
-    let mut bytes = STATE_FORMAT.to_vec();
-    bytes.extend(postcard::to_allocvec(snapshot).map_err(|e| format!("cannot serialize FMU state: {e}"))?);
+/// The serialized FMU state:
+///
+/// | bytes | content |
+/// |---|---|
+/// | 8 | magic `GFMUSTAT` |
+/// | 4 | format version, u32 little-endian ([`STATE_VERSION`]) |
+/// | 4 + n | length of the GUID (u32 LE), then the GUID of the FMU that took the state (UTF-8) |
+/// | 8 + m | length of the payload (u64 LE), then the snapshot in postcard |
+/// | 32 | SHA-256 over all the bytes before it |
+///
+/// Nothing may follow the checksum. A state decodes only in an FMU with the same GUID (the same
+/// interface, model data and model kind).
+pub const STATE_MAGIC: &[u8; 8] = b"GFMUSTAT";
+pub const STATE_VERSION: u32 = 2;
+const DIGEST_LEN: usize = 32;
+
+pub fn serialize_snapshot<S: Serialize>(snapshot: &Snapshot<S>, guid: &str) -> Result<Vec<u8>, String> {
+    let payload = postcard::to_allocvec(snapshot).map_err(|e| format!("cannot serialize FMU state: {e}"))?;
+    let guid_len = u32::try_from(guid.len()).map_err(|_| "the GUID is too long to serialize".to_string())?;
+    let mut bytes = STATE_MAGIC.to_vec();
+    bytes.extend_from_slice(&STATE_VERSION.to_le_bytes());
+    bytes.extend_from_slice(&guid_len.to_le_bytes());
+    bytes.extend_from_slice(guid.as_bytes());
+    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(&payload);
+    let digest = Sha256::digest(&bytes);
+    bytes.extend_from_slice(&digest);
     Ok(bytes)
 }
 
-pub fn deserialize_snapshot<S: for<'de> Deserialize<'de>>(bytes: &[u8]) -> Result<Snapshot<S>, String> {
-    let body = bytes
-        .strip_prefix(STATE_FORMAT.as_slice())
-        .ok_or("serialized FMU state has a wrong header (not from this FMU version)")?;
-    postcard::from_bytes(body).map_err(|e| format!("serialized FMU state is corrupted: {e}"))
+/// Reads `n` bytes at `*at`, or says what is missing.
+fn take<'a>(bytes: &'a [u8], at: &mut usize, n: usize, what: &str) -> Result<&'a [u8], String> {
+    let end = at.checked_add(n).filter(|&e| e <= bytes.len()).ok_or_else(|| {
+        format!("serialized FMU state is truncated: {} bytes, the {what} needs {n} more at byte {}", bytes.len(), at)
+    })?;
+    let slice = &bytes[*at..end];
+    *at = end;
+    Ok(slice)
+}
+
+pub fn deserialize_snapshot<S: for<'de> Deserialize<'de>>(bytes: &[u8], guid: &str) -> Result<Snapshot<S>, String> {
+    let mut at = 0;
+    if take(bytes, &mut at, STATE_MAGIC.len(), "magic")? != STATE_MAGIC.as_slice() {
+        return Err("serialized FMU state has a wrong magic (not a state of this FMU kind)".into());
+    }
+    let version = u32::from_le_bytes(take(bytes, &mut at, 4, "format version")?.try_into().unwrap_or_default());
+    if version != STATE_VERSION {
+        return Err(format!(
+            "serialized FMU state has format version {version}; this FMU reads version {STATE_VERSION}"
+        ));
+    }
+    let guid_len = u32::from_le_bytes(take(bytes, &mut at, 4, "GUID length")?.try_into().unwrap_or_default());
+    let state_guid = take(bytes, &mut at, guid_len as usize, "GUID")?;
+    let payload_len = u64::from_le_bytes(take(bytes, &mut at, 8, "payload length")?.try_into().unwrap_or_default());
+    let payload_len = usize::try_from(payload_len).map_err(|_| format!("payload length {payload_len} is too large"))?;
+    let payload = take(bytes, &mut at, payload_len, "payload")?;
+    let body_len = at;
+    let digest = take(bytes, &mut at, DIGEST_LEN, "SHA-256 checksum")?;
+    if at != bytes.len() {
+        return Err(format!(
+            "serialized FMU state has {} trailing bytes after its checksum (expected {at} bytes, got {})",
+            bytes.len() - at,
+            bytes.len()
+        ));
+    }
+    if Sha256::digest(&bytes[..body_len]).as_slice() != digest {
+        return Err("serialized FMU state is corrupted: its SHA-256 checksum does not match".into());
+    }
+    if state_guid != guid.as_bytes() {
+        return Err(format!(
+            "serialized FMU state is from another FMU: GUID {} (this FMU's is {guid})",
+            String::from_utf8_lossy(state_guid)
+        ));
+    }
+    let (snapshot, rest) =
+        postcard::take_from_bytes(payload).map_err(|e| format!("serialized FMU state is corrupted: {e}"))?;
+    if !rest.is_empty() {
+        return Err(format!("serialized FMU state's payload has {} trailing bytes", rest.len()));
+    }
+    Ok(snapshot)
 }

@@ -40,6 +40,12 @@ pub trait Model: Sized + Send + 'static {
     fn get_integer(&self, state: &Self::State, vr: u32) -> Result<i32, String>;
     /// Applies the start values and computes initial outputs (fmi2ExitInitializationMode).
     fn exit_initialization(&self, state: &mut Self::State) -> Result<(), String>;
+    /// Refuses, before any work, a step of size h (finite, > 0) that cannot be done in bounded
+    /// time with this state's settings (e.g. too many sub-steps); the message says why.
+    fn check_step(&self, state: &Self::State, h: f64) -> Result<(), String>;
+    /// Checks a state restored from an FMU state (possibly deserialized from outside) with the
+    /// rules `set_real` applies to each parameter, and that it fits this model.
+    fn check_state(&self, state: &Self::State) -> Result<(), String>;
     /// Advances from the current time by h (> 0) with the inputs held.
     fn do_step(&self, state: &mut Self::State, h: f64) -> Result<(), String>;
 }
