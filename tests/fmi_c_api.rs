@@ -755,3 +755,54 @@ fn restored_parameters_are_revalidated() {
     assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
     fmi2FreeInstance(c);
 }
+
+/// The stability contract (issue 13): a max_step beyond RK4's stability limit of the stiffest
+/// mesh mode is refused at fmi2ExitInitializationMode, naming the limit, instead of stepping to
+/// speeds of 1e175 with fmi2OK. Evidence for the limit itself: `rk4_stability`'s closed forms
+/// (2√2 on the imaginary axis). A gear of 1e-6 kg·m² makes the mesh mode ~100× faster; after
+/// fmi2Reset the default inertias run.
+#[test]
+fn a_max_step_beyond_the_stiffest_mode_is_refused_at_exit_initialization() {
+    let name = "stability";
+    let c = instantiate(name);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(set(c, "inertia_1", 1e-6), OK);
+    assert_eq!(set(c, "inertia_2", 1e-6), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), ERR);
+    assert_logged(name, "max_step = 1e-5 s exceeds RK4's stability limit");
+    assert_logged(name, "on the stiffest mesh mode (inertias 1e-6 / 1e-6 kg·m²");
+    assert_eq!(fmi2Reset(c), OK);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    run(c, 0.0, 5, 1e-4);
+    fmi2FreeInstance(c);
+}
+
+/// The energy balance per step (issue 13): a state whose work integral disagrees with its energy
+/// by far more than RK4's error — here forged, a kilojoule of input work that never happened, as a
+/// divergence would leave it — makes the next fmi2DoStep an error naming the balance's terms; the
+/// saved state brings the instance back.
+#[test]
+fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
+    use gearfmu::dynamics::fmu::GearPairState;
+    use gearfmu::fmi2::instance::Snapshot;
+    let name = "energy";
+    let c = initialized(name, None);
+    run(c, 0.0, 5, 1e-4);
+    let good = state_of(c);
+    let mut forged: Snapshot<GearPairState> = unsafe { (*(good as *const Snapshot<GearPairState>)).clone() };
+    forged.state.mech.input_work_j += 1e3;
+    let raw = Box::into_raw(Box::new(forged)) as fmi2FMUstate;
+    assert_eq!(fmi2SetFMUstate(c, raw), OK, "a finite, valid state: only the balance can tell");
+    assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), ERR);
+    assert_logged(name, "the energy balance broke");
+    assert_logged(name, "the integration diverges; lower max_step");
+    assert_eq!(fmi2SetFMUstate(c, good), OK);
+    assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), OK);
+    let (mut raw, mut good) = (raw, good);
+    assert_eq!(fmi2FreeFMUstate(c, &mut raw), OK);
+    assert_eq!(fmi2FreeFMUstate(c, &mut good), OK);
+    fmi2FreeInstance(c);
+}

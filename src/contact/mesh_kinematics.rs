@@ -269,10 +269,7 @@ impl PairPlacement {
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, tip2),
                 arm_ratio: cos_bb,
                 // The corner is gear 2's rounded tip edge, not its involute.
-                curvature_radius_m: [
-                    (r * r - g1.base_radius_m.powi(2)).sqrt(),
-                    corner_radius(g2, p.path_start_m - u),
-                ],
+                curvature_radius_m: [(r * r - g1.base_radius_m.powi(2)).sqrt(), corner_radius(g2, p.path_start_m - u)],
             });
         }
         // Gear 1's tip corner on gear 2's flank.

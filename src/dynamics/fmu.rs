@@ -197,6 +197,27 @@ impl GearPairFmu {
 impl GearPairFmu {
     /// An inertia parameter: positive; for the PMOR-Hertz model not below the FE gear's own
     /// (the excess is rigid inertia at the bore: the hub and shaft share).
+    /// The stability contract: max_step must lie within RK4's stability limit of the stiffest
+    /// dynamics the model retains (lumped: the mesh mode at the law's largest tangent stiffness
+    /// with these inertias and this damping; PMOR-Hertz: the pair linearized at 4 × its ROM
+    /// torque, computed offline for the model's own inertias — larger ones only lower it).
+    fn check_stability(&self, s: &GearPairState) -> Result<(), String> {
+        let (limit, what) = match &self.physics {
+            Physics::Lumped(mesh) => {
+                (crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params), "the stiffest mesh mode")
+            }
+            Physics::PmorHertz { model, .. } => (model.rk4_limit_s, "the pair linearized at 4 × its ROM torque"),
+        };
+        if s.max_step_s <= limit {
+            Ok(())
+        } else {
+            Err(format!(
+                "max_step = {:e} s exceeds RK4's stability limit {limit:.4e} s on {what} (inertias {:e} / {:e} kg·m², mesh damping ratio {}): lower max_step",
+                s.max_step_s, s.params.inertia_1_kgm2, s.params.inertia_2_kgm2, s.params.mesh_damping_ratio
+            ))
+        }
+    }
+
     fn inertia(&self, name: &str, gear: usize, value: f64) -> Result<f64, String> {
         let value = positive(name, value)?;
         if let Physics::PmorHertz { model, .. } = &self.physics {
@@ -377,6 +398,7 @@ impl Model for GearPairFmu {
     }
 
     fn exit_initialization(&self, s: &mut GearPairState) -> Result<(), String> {
+        self.check_stability(s)?;
         s.mech = s.start;
         if let Physics::PmorHertz { model, place } = &self.physics {
             let start = model.initial_state([s.start.theta_1, s.start.theta_2], [s.start.omega_1, s.start.omega_2]);
@@ -441,18 +463,56 @@ impl Model for GearPairFmu {
             Physics::Lumped(mesh) => mesh,
             Physics::PmorHertz { model, place } => {
                 let mut state = s.pmor.clone().ok_or("the PMOR-Hertz state is not initialized")?;
-                self.pmor(model, place, s).advance(&mut state, s.torques_nm, h, s.max_step_s)?;
+                let dynamics = self.pmor(model, place, s);
+                dynamics.advance(&mut state, s.torques_nm, h, s.max_step_s)?;
+                let start = model.initial_state([s.start.theta_1, s.start.theta_2], [s.start.omega_1, s.start.omega_2]);
+                energy_balance(
+                    [dynamics.outputs(&start)?.total_energy_j(), dynamics.outputs(&state)?.total_energy_j()],
+                    [state.input_work_j - start.input_work_j, state.dissipated_j - start.dissipated_j],
+                )?;
                 s.pmor = Some(state);
                 return Ok(());
             }
         };
         let model = LumpedModel::new(mesh, s.params);
-        model.advance(&mut s.mech, s.torques_nm, h, s.max_step_s);
-        let m = &s.mech;
-        if [m.theta_1, m.omega_1, m.theta_2, m.omega_2].iter().all(|x| x.is_finite()) {
-            Ok(())
-        } else {
-            Err(format!("the state became non-finite: the integrator is unstable at max_step = {} s", s.max_step_s))
+        let mut next = s.mech;
+        model.advance(&mut next, s.torques_nm, h, s.max_step_s);
+        let m = &next;
+        if ![m.theta_1, m.omega_1, m.theta_2, m.omega_2].iter().all(|x| x.is_finite()) {
+            return Err(format!(
+                "the state became non-finite: the integrator is unstable at max_step = {} s",
+                s.max_step_s
+            ));
         }
+        let stored = |x: &LumpedState| model.kinetic_energy(x) + model.mesh_state(x).potential_j;
+        energy_balance(
+            [stored(&s.start), stored(&next)],
+            [next.input_work_j - s.start.input_work_j, next.dissipated_j - s.start.dissipated_j],
+        )?;
+        s.mech = next;
+        Ok(())
+    }
+}
+
+/// How far the energy balance E + D − W − E₀ may drift, as a share of the energy in play
+/// (E₀, |W|, D and the present E, summed), before a step is called divergent. A stable RK4 step
+/// keeps it orders of magnitude smaller (`tests/lumped_physics.rs`: 1e-3 of the motor work;
+/// `tests/pmor_dynamics.rs`: 1e-4 of the total); an unstable one grows it geometrically, so the
+/// step where divergence starts is an error instead of an OK with garbage.
+pub const ENERGY_BALANCE_SLACK: f64 = 0.1;
+
+/// `Err` naming the terms when stored energy [E₀, E] and the integrals [W (input work),
+/// D (dissipated)] since the start do not balance within `ENERGY_BALANCE_SLACK`.
+fn energy_balance(stored_j: [f64; 2], integrals_j: [f64; 2]) -> Result<(), String> {
+    let [start, now] = stored_j;
+    let [work, dissipated] = integrals_j;
+    let residual = now + dissipated - work - start;
+    let scale = start.abs() + now.abs() + work.abs() + dissipated.abs();
+    if residual.is_finite() && residual.abs() <= ENERGY_BALANCE_SLACK * scale + 1e-12 {
+        Ok(())
+    } else {
+        Err(format!(
+            "the energy balance broke: stored {now:.6e} J against {start:.6e} J at the start + {work:.6e} J of input work − {dissipated:.6e} J dissipated (residual {residual:.3e} J, over {ENERGY_BALANCE_SLACK} of the energy in play): the integration diverges; lower max_step"
+        ))
     }
 }

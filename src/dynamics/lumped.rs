@@ -119,6 +119,18 @@ pub fn mesh_damping_coefficient(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 
     2.0 * p.mesh_damping_ratio * (mesh.reference_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
 }
 
+/// RK4's stability limit (s) on the stiffest mesh mode: the equivalent mesh mass on the mesh law's
+/// largest tangent stiffness (either flank), with the mesh damping.
+pub fn rk4_stability_limit_s(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
+    let stiffness = mesh.drive.max_tangent_stiffness().max(mesh.coast.max_tangent_stiffness());
+    let lambdas = crate::dynamics::rk4_stability::oscillator_eigenvalues(
+        equivalent_mesh_mass(mesh, p),
+        mesh_damping_coefficient(mesh, p),
+        stiffness,
+    );
+    crate::dynamics::rk4_stability::largest_stable_step(&lambdas, 1.0)
+}
+
 /// The state of the two rigid gears, plus the work integrals that the energy balance needs.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct LumpedState {

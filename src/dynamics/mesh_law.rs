@@ -134,6 +134,19 @@ impl MeshLaw {
         force_n / mean
     }
 
+    /// The largest tangent stiffness ∂F/∂δ anywhere in the table (N/m): the stiffest the mesh
+    /// gets (beyond the table's top force the law continues with its last slope).
+    pub fn max_tangent_stiffness(&self) -> f64 {
+        let f = &self.force_levels_n;
+        (0..self.rows())
+            .flat_map(|i| {
+                let row = self.row(i);
+                (1..f.len()).map(move |k| (f[k] - f[k - 1]) / (row[k] - row[k - 1]))
+            })
+            .filter(|k| k.is_finite() && *k > 0.0)
+            .fold(0.0, f64::max)
+    }
+
     /// Mean over ξ of the tangent stiffness ∂F/∂δ at the static deflection under F (N/m): what
     /// sets the frequency of small vibrations about that load.
     pub fn mean_tangent_stiffness(&self, force_n: f64) -> f64 {

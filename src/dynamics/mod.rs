@@ -7,3 +7,4 @@ pub mod lumped;
 pub mod mesh_law;
 pub mod mesh_stiffness;
 pub mod pmor;
+pub mod rk4_stability;

@@ -458,6 +458,7 @@ pub fn build_dynamic_model(
         modal_damping_ratio: options.modal_damping_ratio,
         shape_damping_ratio: options.shape_damping_ratio,
         max_step_s: 0.0,
+        rk4_limit_s: 0.0,
         info: PmorBuildInfo {
             rom_torques_nm: options.rom_torques_nm.clone(),
             depth_m: options.depth_m,
@@ -469,6 +470,7 @@ pub fn build_dynamic_model(
     progress("linearizing the pair for the integrator step".into());
     let step = integrator_step(&model, options)?;
     model.max_step_s = step.max_step_s;
+    model.rk4_limit_s = step.rk4_limit_s;
     let report = DynamicBuildReport {
         step,
         modes_hz: report_modes.try_into().map_err(|_| "two gears")?,

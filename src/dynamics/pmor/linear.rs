@@ -140,22 +140,6 @@ impl LinearizedPair {
             .filter(|l| l.norm() > 1e2)
             .map(|l| Complex::new(l.re.min(0.0), l.im))
             .collect();
-        let stable = |h: f64| {
-            lambdas.iter().all(|l| {
-                let z = l * h;
-                let r = Complex::new(1.0, 0.0) + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0;
-                r.norm() <= 1.0 + 1e-12
-            })
-        };
-        let (mut lo, mut hi) = (0.0, 1e-3);
-        for _ in 0..80 {
-            let mid = 0.5 * (lo + hi);
-            if stable(mid) {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        lo
+        crate::dynamics::rk4_stability::largest_stable_step(&lambdas, 1e-3)
     }
 }

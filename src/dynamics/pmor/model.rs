@@ -135,5 +135,8 @@ pub struct PmorModel {
     /// on the pair linearized at a load above its range (`rom::dynamic_reductor`), so the step
     /// follows the stiffest mode of this model instead of a constant.
     pub max_step_s: f64,
+    /// RK4's stability limit of that linearization (s): the FMU refuses a max_step above it at
+    /// ExitInitializationMode (issue 13's stability contract).
+    pub rk4_limit_s: f64,
     pub info: PmorBuildInfo,
 }
