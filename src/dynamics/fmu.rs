@@ -494,25 +494,28 @@ impl Model for GearPairFmu {
     }
 }
 
-/// How far the energy balance E + D − W − E₀ may drift, as a share of the energy in play
-/// (E₀, |W|, D and the present E, summed), before a step is called divergent. A stable RK4 step
-/// keeps it orders of magnitude smaller (`tests/lumped_physics.rs`: 1e-3 of the motor work;
-/// `tests/pmor_dynamics.rs`: 1e-4 of the total); an unstable one grows it geometrically, so the
-/// step where divergence starts is an error instead of an OK with garbage.
+/// How much energy a step may create, E + D − W − E₀ > 0, as a share of the energy in play
+/// (E₀, |W|, D and the present E, summed), before it is called divergent. The bound is one-sided,
+/// as the physics is: the stored energy may not exceed the start's plus the work put in minus
+/// what was dissipated. An unstable RK4 step creates energy geometrically, so the step where
+/// divergence starts is an error instead of an OK with garbage. The other sign is the
+/// integrator's own loss: RK4 at the lumped default step loses up to ~10 % of the energy in play
+/// across coast-flank impacts (the soak in `tests/fmi_c_api.rs`), which is an accuracy matter,
+/// not a divergence.
 pub const ENERGY_BALANCE_SLACK: f64 = 0.1;
 
-/// `Err` naming the terms when stored energy [E₀, E] and the integrals [W (input work),
-/// D (dissipated)] since the start do not balance within `ENERGY_BALANCE_SLACK`.
+/// `Err` naming the terms when stored energy [E₀, E] exceeds the start's plus the integrals
+/// [W (input work), D (dissipated)] since the start by more than `ENERGY_BALANCE_SLACK`.
 fn energy_balance(stored_j: [f64; 2], integrals_j: [f64; 2]) -> Result<(), String> {
     let [start, now] = stored_j;
     let [work, dissipated] = integrals_j;
     let residual = now + dissipated - work - start;
     let scale = start.abs() + now.abs() + work.abs() + dissipated.abs();
-    if residual.is_finite() && residual.abs() <= ENERGY_BALANCE_SLACK * scale + 1e-12 {
+    if residual.is_finite() && residual <= ENERGY_BALANCE_SLACK * scale + 1e-12 {
         Ok(())
     } else {
         Err(format!(
-            "the energy balance broke: stored {now:.6e} J against {start:.6e} J at the start + {work:.6e} J of input work − {dissipated:.6e} J dissipated (residual {residual:.3e} J, over {ENERGY_BALANCE_SLACK} of the energy in play): the integration diverges; lower max_step"
+            "the energy balance broke: stored {now:.6e} J exceeds {start:.6e} J at the start + {work:.6e} J of input work − {dissipated:.6e} J dissipated (residual {residual:.3e} J, over {ENERGY_BALANCE_SLACK} of the energy in play): the integration diverges; lower max_step"
         ))
     }
 }
