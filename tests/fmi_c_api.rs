@@ -781,9 +781,9 @@ fn a_max_step_beyond_the_stiffest_mode_is_refused_at_exit_initialization() {
 }
 
 /// The energy balance per step (issue 13): a state whose work integral disagrees with its energy
-/// by far more than RK4's error — here forged, a kilojoule of input work that never happened, as a
-/// divergence would leave it — makes the next fmi2DoStep an error naming the balance's terms; the
-/// saved state brings the instance back.
+/// by far more than RK4's error — here forged, a kilojoule of input work struck from the books, so
+/// that the stored energy exceeds what was put in, as a divergence would leave it — makes the next
+/// fmi2DoStep an error naming the balance's terms; the saved state brings the instance back.
 #[test]
 fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
     use gearfmu::dynamics::fmu::GearPairState;
@@ -793,7 +793,7 @@ fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
     run(c, 0.0, 5, 1e-4);
     let good = state_of(c);
     let mut forged: Snapshot<GearPairState> = unsafe { (*(good as *const Snapshot<GearPairState>)).clone() };
-    forged.state.mech.input_work_j += 1e3;
+    forged.state.mech.input_work_j -= 1e3;
     let raw = Box::into_raw(Box::new(forged)) as fmi2FMUstate;
     assert_eq!(fmi2SetFMUstate(c, raw), OK, "a finite, valid state: only the balance can tell");
     assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), ERR);
