@@ -34,7 +34,7 @@ pub const LOG_CATEGORIES: [&str; 4] = ["logStatusError", "logStatusWarning", "lo
 const LOG_DISCARD: usize = 3;
 
 /// What an FMU state holds: the model's state, the time and the phase it was taken in.
-#[derive(Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Snapshot<S> {
     pub state: S,
     pub time: f64,
