@@ -1001,3 +1001,33 @@ fn fuzz_call_sequences() {
         result
     });
 }
+
+// ---------------------------------------------------------------------------------------------
+// Regressions: what the targets found, pinned.
+
+/// The spur example with one `key = value` line replaced.
+fn spur_with(key: &str, value: &str) -> String {
+    let text = example("kurokawa_spur.toml");
+    let line = text.lines().find(|l| l.starts_with(&format!("{key} ="))).unwrap().to_string();
+    text.replace(&line, &format!("{key} = {value}"))
+}
+
+/// Found by `fuzz_spec_parser`: a value that passes "positive and finite" in the spec's units
+/// but is zero or infinite in SI (face width 5e-324 mm → 0 m, E = 1e300 GPa → inf Pa) was
+/// accepted, as was a subnormal one; each is now refused naming the field.
+#[test]
+fn regression_spec_values_out_of_range_in_si_are_refused() {
+    for (key, value) in [
+        ("face_width_mm", "5e-324"),
+        ("module_mm", "1e-310"),
+        ("youngs_modulus_gpa", "1e300"),
+        ("bore_radius_mm", "5e-324"),
+        ("density_kg_m3", "5e-324"),
+        ("module_mm", "3.3337608712355604e240"),
+    ] {
+        let text = spur_with(key, value);
+        let err = PairSpec::from_toml(&text).and_then(|s| GearPair::from_spec(&s)).map(|_| ()).unwrap_err();
+        assert!(err.to_string().contains(key), "{key} = {value}: {err}");
+        assert!(!err.to_string().contains("NaN") || err.to_string().contains("out of floating-point range"));
+    }
+}
