@@ -126,6 +126,15 @@ fn resources() -> &'static Resources {
     })
 }
 
+/// The lumped mesh inside the resources' model file.
+fn lumped_mesh() -> &'static LumpedMesh {
+    static M: OnceLock<LumpedMesh> = OnceLock::new();
+    M.get_or_init(|| match ModelFile::from_bytes(&resources().model_bin).unwrap().model {
+        ModelKind::Lumped(mesh) => mesh,
+        ModelKind::PmorHertz(_) => unreachable!("the fuzz FMU is lumped"),
+    })
+}
+
 fn callbacks() -> fmi2CallbackFunctions {
     fmi2CallbackFunctions {
         logger: Some(fmi_sys::fmi2::logger::callback_logger_handler),
@@ -618,6 +627,10 @@ fn fuzz_state_decoder() {
             prop_assert!(st.params.inertia_1_kgm2 > 0.0 && st.params.inertia_2_kgm2 > 0.0);
             prop_assert!((0.0..1.0).contains(&st.params.mesh_damping_ratio));
             prop_assert!(st.pmor.is_none());
+            if matches!(snap.phase, Phase::StepComplete | Phase::StepFailed | Phase::Terminated) {
+                let limit = gearfmu::dynamics::lumped::rk4_stability_limit_s(lumped_mesh(), &st.params);
+                prop_assert!(st.max_step_s <= limit, "an initialized state with max_step {} > {limit}", st.max_step_s);
+            }
             let status = no_panic("fmi2SetFMUstate", &case, || fmi2SetFMUstate(c, s))?;
             prop_assert_eq!(status, OK, "a decoded state was refused by SetFMUstate: {:?}", take_logs(&name));
             prop_assert_eq!(phase_of(c), snap.phase);
@@ -1029,5 +1042,51 @@ fn regression_spec_values_out_of_range_in_si_are_refused() {
         let err = PairSpec::from_toml(&text).and_then(|s| GearPair::from_spec(&s)).map(|_| ()).unwrap_err();
         assert!(err.to_string().contains(key), "{key} = {value}: {err}");
         assert!(!err.to_string().contains("NaN") || err.to_string().contains("out of floating-point range"));
+    }
+}
+
+/// A state taken after initialization carries the stability contract of
+/// fmi2ExitInitializationMode (max_step within RK4's limit on the stiffest mesh mode); a forged
+/// one that breaks it (max_step 1e-3 s, or inertias so small the default max_step is unstable)
+/// must be refused when restored, as ExitInitializationMode would refuse it, while the same
+/// settings in a state taken before initialization stay restorable.
+#[test]
+fn regression_restored_state_is_held_to_the_stability_contract() {
+    let guid = resources().guid.clone();
+    let real: Snapshot<GearPairState> = deserialize_snapshot(real_state_bytes(), &guid).unwrap();
+    let mut big_step = real.clone();
+    big_step.state.max_step_s = 1e-3;
+    let mut light = real.clone();
+    light.state.params.inertia_1_kgm2 = 1e-9;
+    light.state.params.inertia_2_kgm2 = 1e-9;
+    for (what, forged) in [("max_step 1e-3", big_step), ("inertias 1e-9", light)] {
+        for phase in [Phase::StepComplete, Phase::StepFailed, Phase::Terminated, Phase::Instantiated] {
+            let mut forged = forged.clone();
+            forged.phase = phase;
+            let bytes = serialize_snapshot(&forged, &guid).unwrap();
+            let name = unique_name("stability");
+            let c = instantiate(&name);
+            let mut s: fmi2FMUstate = std::ptr::null_mut();
+            let status = fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s);
+            if phase == Phase::Instantiated {
+                assert_eq!(status, OK, "{what} before initialization: {:?}", take_logs(&name));
+                assert_eq!(fmi2SetFMUstate(c, s), OK);
+                // ExitInitializationMode refuses it, as it refuses the same settings from SetReal.
+                assert_eq!(fmi2EnterInitializationMode(c), OK);
+                assert_eq!(fmi2ExitInitializationMode(c), ERR);
+                assert!(take_logs(&name).iter().any(|l| l.contains("stability limit")));
+                assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+            } else {
+                assert_eq!(status, ERR, "{what} in phase {phase:?} was accepted");
+                let logs = take_logs(&name);
+                assert!(logs.iter().any(|l| l.contains("stability limit")), "{what}: {logs:?}");
+                // The instance stays usable: Reset, initialize, step.
+                assert_eq!(fmi2Reset(c), OK);
+                assert_eq!(fmi2EnterInitializationMode(c), OK);
+                assert_eq!(fmi2ExitInitializationMode(c), OK);
+                assert_eq!(fmi2DoStep(c, 0.0, 1e-4, 1), OK);
+            }
+            fmi2FreeInstance(c);
+        }
     }
 }

@@ -422,12 +422,16 @@ impl Model for GearPairFmu {
         }
     }
 
-    fn check_state(&self, s: &GearPairState) -> Result<(), String> {
+    fn check_state(&self, s: &GearPairState, initialized: bool) -> Result<(), String> {
         // The parameters, with the rules of set_real.
         max_step(s.max_step_s)?;
         self.inertia("inertia_1", 0, s.params.inertia_1_kgm2)?;
         self.inertia("inertia_2", 1, s.params.inertia_2_kgm2)?;
         Self::mesh_damping_ratio(s.params.mesh_damping_ratio)?;
+        // After initialization, the stability contract of exit_initialization holds too.
+        if initialized {
+            self.check_stability(s)?;
+        }
         // Inputs, start values and the mechanical state: finite (set_reals refuses the rest).
         finite("tau_1/tau_2", &s.torques_nm)?;
         let l = |m: &LumpedState| [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j];

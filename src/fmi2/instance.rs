@@ -265,7 +265,11 @@ impl<M: Model> Instance<M> {
         if snapshot.phase == Phase::Fatal {
             return Err("the FMU state was taken in phase Fatal, which no FMU state can be".into());
         }
-        self.model.check_state(&snapshot.state)
+        // A state taken after initialization must also pass what fmi2ExitInitializationMode
+        // checks (found while fuzzing the state decoder: a forged StepComplete state with
+        // max_step above the stability limit was restored and stepped).
+        let initialized = matches!(snapshot.phase, Phase::StepComplete | Phase::StepFailed | Phase::Terminated);
+        self.model.check_state(&snapshot.state, initialized)
     }
 
     /// Restores a snapshot after [`Self::check_snapshot`]; a refused one changes nothing.
