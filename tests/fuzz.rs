@@ -58,7 +58,30 @@ where
         }
     }
     let t = start.elapsed().as_secs_f64();
-    eprintln!("fuzz {name}: {done} cases in {t:.1} s = {:.0} cases/s, no finding", done as f64 / t);
+    eprintln!(
+        "fuzz {name}: {done} cases in {t:.1} s = {:.0} cases/s, no finding ({})",
+        done as f64 / t,
+        stats_of(name)
+    );
+}
+
+/// Outcome counts per target ("target/outcome" → count), printed after each run so a run shows
+/// which paths it reached (accepted and refused inputs, statuses).
+static STATS: Mutex<Option<HashMap<String, u64>>> = Mutex::new(None);
+
+fn stat(target: &str, outcome: &str) {
+    *STATS.lock().unwrap().get_or_insert_with(HashMap::new).entry(format!("{target}/{outcome}")).or_default() += 1;
+}
+
+fn stats_of(target: &str) -> String {
+    let stats = STATS.lock().unwrap();
+    let mut v: Vec<(String, u64)> = stats
+        .iter()
+        .flatten()
+        .filter_map(|(k, n)| k.strip_prefix(&format!("{target}/")).map(|o| (o.to_string(), *n)))
+        .collect();
+    v.sort();
+    v.iter().map(|(o, n)| format!("{o} {n}")).collect::<Vec<_>>().join(", ")
 }
 
 /// Runs `f`, turning a panic into a test failure that prints `input`.
@@ -286,6 +309,8 @@ enum TextEdit {
     Integer(usize, i64),
     /// Insert a random line.
     InsertLine(usize, String),
+    /// Multiply the (index mod count)-th number by a plausible factor (stays near valid specs).
+    Scale(usize, f64),
 }
 
 fn text_edit() -> impl Strategy<Value = TextEdit> {
@@ -297,6 +322,8 @@ fn text_edit() -> impl Strategy<Value = TextEdit> {
         2 => (any::<usize>(), prop_oneof![any::<i64>(), -5i64..200, Just(i64::MAX), Just(100_000)])
             .prop_map(|(i, n)| TextEdit::Integer(i, n)),
         1 => (any::<usize>(), "[a-z_\\[\\]=\"0-9. -]{0,40}").prop_map(|(i, s)| TextEdit::InsertLine(i, s)),
+        4 => (any::<usize>(), prop_oneof![0.2..5.0f64, Just(0.0), Just(-1.0), Just(1e-6), Just(1e6)])
+            .prop_map(|(i, k)| TextEdit::Scale(i, k)),
     ]
 }
 
@@ -320,9 +347,10 @@ fn number_spans(text: &str) -> Vec<(usize, usize)> {
             let value = &line[eq + 1..];
             let lead = value.len() - value.trim_start().len();
             let start = offset + eq + 1 + lead;
-            let len = value.trim_start().find(|c: char| !(c.is_ascii_alphanumeric() || "+-._".contains(c))).unwrap_or(
-                value.trim_start().len(),
-            );
+            let len = value
+                .trim_start()
+                .find(|c: char| !(c.is_ascii_alphanumeric() || "+-._".contains(c)))
+                .unwrap_or(value.trim_start().len());
             let token = &text[start..start + len];
             if len > 0 && token.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '+') {
                 spans.push((start, start + len));
@@ -358,7 +386,7 @@ fn apply_text(text: &str, edits: &[TextEdit]) -> String {
                 }
                 text = lines.join("\n");
             }
-            TextEdit::Float(i, _) | TextEdit::Integer(i, _) => {
+            TextEdit::Float(i, _) | TextEdit::Integer(i, _) | TextEdit::Scale(i, _) => {
                 let spans = number_spans(&text);
                 if spans.is_empty() {
                     continue;
@@ -367,6 +395,10 @@ fn apply_text(text: &str, edits: &[TextEdit]) -> String {
                 let new = match e {
                     TextEdit::Float(_, x) => toml_float(*x),
                     TextEdit::Integer(_, n) => n.to_string(),
+                    TextEdit::Scale(_, k) => match text[a..b].parse::<i64>() {
+                        Ok(n) => ((n as f64 * k).round() as i64).to_string(),
+                        Err(_) => text[a..b].parse::<f64>().map(|x| toml_float(x * k)).unwrap_or_default(),
+                    },
                     _ => unreachable!(),
                 };
                 text.replace_range(a..b, &new);
@@ -388,6 +420,7 @@ fn check_spec(text: &str) -> Result<(), TestCaseError> {
     let result = no_panic("PairSpec::from_toml + GearPair::from_spec", &text, || {
         PairSpec::from_toml(text).and_then(|s| GearPair::from_spec(&s))
     })?;
+    stat("spec_parser", if result.is_ok() { "accepted" } else { "refused" });
     match result {
         Ok(pair) => {
             for (what, x) in [
@@ -399,7 +432,11 @@ fn check_spec(text: &str) -> Result<(), TestCaseError> {
             ] {
                 prop_assert!(x.is_finite() && x > 0.0, "accepted spec gives {what} = {x}: {text:?}");
             }
-            prop_assert!(pair.backlash_loa_m.is_finite(), "accepted spec gives backlash {}: {text:?}", pair.backlash_loa_m);
+            prop_assert!(
+                pair.backlash_loa_m.is_finite(),
+                "accepted spec gives backlash {}: {text:?}",
+                pair.backlash_loa_m
+            );
         }
         Err(e) => prop_assert!(!e.to_string().trim().is_empty(), "an empty error for {text:?}"),
     }
@@ -420,7 +457,7 @@ fn fuzz_spec_parser() {
         1 => any::<String>(),
         1 => "[a-z_\\[\\]=\"0-9.\n -]{0,200}",
     ];
-    fuzz("spec_parser", 300, strategy, |text| check_spec(&text));
+    fuzz("spec_parser", 2000, strategy, |text| check_spec(&text));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -452,7 +489,7 @@ fn fuzz_model_file_decoder() {
         1 => edits().prop_map(ModelFileCase::Raw),
         3 => edits().prop_map(ModelFileCase::Resealed),
     ];
-    fuzz("model_file_decoder", 300, strategy, |case| {
+    fuzz("model_file_decoder", 500, strategy, |case| {
         let bytes = match &case {
             ModelFileCase::Raw(e) => {
                 let mut b = original.clone();
@@ -466,6 +503,7 @@ fn fuzz_model_file_decoder() {
             }
         };
         let result = no_panic("ModelFile::from_bytes", &case, || ModelFile::from_bytes(&bytes))?;
+        stat("model_file_decoder", if result.is_ok() { "decoded" } else { "refused" });
         match result {
             Err(e) => prop_assert!(!e.trim().is_empty()),
             Ok(file) => {
@@ -537,9 +575,23 @@ enum StateCase {
 fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCase> {
     let s = real.state.clone();
     let lumped = move |m: gearfmu::dynamics::lumped::LumpedState| {
-        (field_f64(m.theta_1), field_f64(m.omega_1), field_f64(m.theta_2), field_f64(m.omega_2), field_f64(m.input_work_j), field_f64(m.dissipated_j))
+        (
+            field_f64(m.theta_1),
+            field_f64(m.omega_1),
+            field_f64(m.theta_2),
+            field_f64(m.omega_2),
+            field_f64(m.input_work_j),
+            field_f64(m.dissipated_j),
+        )
             .prop_map(|(theta_1, omega_1, theta_2, omega_2, input_work_j, dissipated_j)| {
-                gearfmu::dynamics::lumped::LumpedState { theta_1, omega_1, theta_2, omega_2, input_work_j, dissipated_j }
+                gearfmu::dynamics::lumped::LumpedState {
+                    theta_1,
+                    omega_1,
+                    theta_2,
+                    omega_2,
+                    input_work_j,
+                    dissipated_j,
+                }
             })
     };
     (
@@ -547,7 +599,11 @@ fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCas
         lumped(s.start),
         lumped(s.mech),
         prop_oneof![2 => Just(s.max_step_s), 1 => hostile_f64(), 1 => 1e-12..1e-2f64],
-        (field_f64(s.params.inertia_1_kgm2), field_f64(s.params.inertia_2_kgm2), field_f64(s.params.mesh_damping_ratio)),
+        (
+            field_f64(s.params.inertia_1_kgm2),
+            field_f64(s.params.inertia_2_kgm2),
+            field_f64(s.params.mesh_damping_ratio),
+        ),
         (field_f64(real.time), prop_oneof![Just(None), hostile_f64().prop_map(Some)], any_phase()),
     )
         .prop_map(move |(tau, start, mech, max_step_s, (i1, i2, z), (time, stop_time, phase))| {
@@ -580,7 +636,7 @@ fn fuzz_state_decoder() {
         3 => edits().prop_map(StateCase::Resealed),
         3 => forged_state(real.clone()),
     ];
-    fuzz("state_decoder", 300, strategy, |case| {
+    fuzz("state_decoder", 500, strategy, |case| {
         let bytes = match &case {
             StateCase::Raw(e) => {
                 let mut b = original.clone();
@@ -594,8 +650,7 @@ fn fuzz_state_decoder() {
             }
             StateCase::Forged(snapshot) => serialize_snapshot(snapshot, &guid).unwrap(),
         };
-        let decoded =
-            no_panic("deserialize_snapshot", &case, || deserialize_snapshot::<GearPairState>(&bytes, &guid))?;
+        let decoded = no_panic("deserialize_snapshot", &case, || deserialize_snapshot::<GearPairState>(&bytes, &guid))?;
         if let (StateCase::Raw(_), Ok(_)) = (&case, &decoded) {
             prop_assert_eq!(&bytes, &original, "a raw edit passed the checksum");
         }
@@ -610,6 +665,13 @@ fn fuzz_state_decoder() {
             fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s)
         })?;
         prop_assert!(status == OK || status == ERR, "DeSerialize returned {status}");
+        let kind = match &case {
+            StateCase::Raw(_) => "raw",
+            StateCase::Resealed(_) => "resealed",
+            StateCase::Forged(_) => "forged",
+        };
+        let decoded_ok = if decoded.is_ok() { "decoded" } else { "undecodable" };
+        stat("state_decoder", &format!("{kind} {decoded_ok} {}", if status == OK { "accepted" } else { "refused" }));
         if status == ERR {
             prop_assert!(s.is_null());
             let logs = take_logs(&name);
@@ -640,6 +702,7 @@ fn fuzz_state_decoder() {
             let status = no_panic("fmi2DoStep", &case, || fmi2DoStep(c, snap.time, h, 1))?;
             prop_assert!(status_is_valid(status));
             prop_assert!(t0.elapsed() < Duration::from_secs(2), "DoStep took {:?}", t0.elapsed());
+            stat("state_decoder", if status == OK { "step OK" } else { "step refused" });
             let logs = take_logs(&name);
             prop_assert!(!logs.iter().any(|l| l.contains("panic")), "a panic inside the FMU: {logs:?}");
             if snap.phase != Phase::StepComplete {
@@ -658,11 +721,18 @@ fn fuzz_state_decoder() {
 
 #[derive(Debug, Clone)]
 enum Call {
-    SetupExperiment { start: f64, stop: Option<f64> },
+    SetupExperiment {
+        start: f64,
+        stop: Option<f64>,
+    },
     EnterInit,
     ExitInit,
     /// `at_time`: currentCommunicationPoint is the FMU's time; otherwise time + `off`.
-    DoStep { h: f64, at_time: bool, off: f64 },
+    DoStep {
+        h: f64,
+        at_time: bool,
+        off: f64,
+    },
     SetReal(Vec<(u32, f64)>),
     GetReal(Vec<u32>),
     /// Overwrite pool state (index) if Some, else a new one.
@@ -670,11 +740,31 @@ enum Call {
     SetFMUstate(usize),
     FreeFMUstate(usize),
     /// Serialize pool state (index), DeSerialize it (optionally with one byte flipped).
-    SerializeRoundTrip { index: usize, corrupt: Option<(usize, u8)>, wrong_size: bool },
+    SerializeRoundTrip {
+        index: usize,
+        corrupt: Option<(usize, u8)>,
+        wrong_size: bool,
+    },
     Terminate,
     Reset,
     /// 0: GetStatus, 1: Real, 2: Integer, 3: Boolean, 4: String; kind 0..=4 (4 is no kind).
-    Status { which: u8, kind: u32 },
+    Status {
+        which: u8,
+        kind: u32,
+    },
+    /// The call a well-behaved master would make next in the model's phase (keeps sequences
+    /// out of the Error phase long enough to reach deep states); `h` for a DoStep.
+    Next(f64),
+}
+
+/// What [`Call::Next`] is in a phase.
+fn next_call(p: Phase, h: f64) -> Call {
+    match p {
+        Phase::Instantiated => Call::EnterInit,
+        Phase::InitializationMode => Call::ExitInit,
+        Phase::StepComplete => Call::DoStep { h, at_time: true, off: 0.0 },
+        _ => Call::Reset,
+    }
 }
 
 fn any_vr() -> impl Strategy<Value = u32> {
@@ -712,6 +802,7 @@ fn call() -> impl Strategy<Value = Call> {
         2 => Just(Call::Terminate),
         2 => Just(Call::Reset),
         3 => (0u8..5, 0u32..5).prop_map(|(which, kind)| Call::Status { which, kind }),
+        16 => (1e-6..1e-3f64).prop_map(Call::Next),
     ]
 }
 
@@ -732,6 +823,7 @@ fn allowed_in(call: &Call, p: Phase) -> bool {
         | Call::Reset => p != Fatal,
         Call::Terminate => matches!(p, StepComplete | StepFailed),
         Call::Status { .. } => matches!(p, StepComplete | StepFailed | Terminated),
+        Call::Next(h) => allowed_in(&next_call(p, *h), p),
     }
 }
 
@@ -755,7 +847,11 @@ fn fresh() -> Record {
 }
 
 /// Runs one call; returns (status, the statuses the model allows, the phases it allows after).
-fn run_call(c: fmi2Component, m: &mut Machine, call: &Call) -> Result<(fmi2Status, Vec<fmi2Status>, Vec<Phase>), TestCaseError> {
+fn run_call(
+    c: fmi2Component,
+    m: &mut Machine,
+    call: &Call,
+) -> Result<(fmi2Status, Vec<fmi2Status>, Vec<Phase>), TestCaseError> {
     let before = m.rec;
     let allowed = allowed_in(call, before.phase);
     let error_phase = if before.phase == Phase::Fatal { Phase::Fatal } else { Phase::Error };
@@ -965,6 +1061,7 @@ fn run_call(c: fmi2Component, m: &mut Machine, call: &Call) -> Result<(fmi2Statu
             };
             (s, vec![if answered { OK } else { DISCARD }], vec![before.phase])
         }
+        Call::Next(_) => unreachable!("resolved by the caller"),
     };
     if allowed {
         Ok((status, expect, phases))
@@ -977,14 +1074,27 @@ fn run_call(c: fmi2Component, m: &mut Machine, call: &Call) -> Result<(fmi2Statu
 fn fuzz_call_sequences() {
     resources();
     let strategy = proptest::collection::vec(call(), 1..=40);
-    fuzz("call_sequences", 200, strategy, |calls| {
+    fuzz("call_sequences", 500, strategy, |calls| {
         let name = unique_name("seq");
         let c = instantiate(&name);
         let mut m = Machine { rec: fresh(), pool: Vec::new() };
         let result = no_panic("an FMI call sequence", &calls, || -> Result<(), TestCaseError> {
             for (k, call) in calls.iter().enumerate() {
+                let call = &match call {
+                    Call::Next(h) => next_call(m.rec.phase, *h),
+                    other => other.clone(),
+                };
                 let (status, expect, phases) = run_call(c, &mut m, call)?;
                 let actual = phase_of(c);
+                let verdict = match (allowed_in(call, m.rec.phase), status) {
+                    (false, _) => "not allowed",
+                    (true, OK) => "OK",
+                    (true, DISCARD) => "Discard",
+                    (true, _) => "Error",
+                };
+                let call_name = format!("{call:?}");
+                let call_name = call_name.split(|c: char| !c.is_alphanumeric()).next().unwrap_or_default();
+                stat("call_sequences", &format!("{call_name} {verdict}"));
                 prop_assert!(status_is_valid(status), "call {k} {call:?} returned status {status}");
                 prop_assert!(
                     expect.contains(&status),
