@@ -511,9 +511,48 @@ fn fuzz_model_file_decoder() {
                 if let ModelFileCase::Raw(_) = case {
                     prop_assert_eq!(&bytes, &original, "a raw edit passed the checksum");
                 }
-                // A decoded file must also load into the FMU without panicking.
+                // A decoded file must also load into the FMU without panicking, and an FMU
+                // instantiated on it must answer initialization, a step and the outputs with
+                // valid statuses, without a panic inside (the guard would turn one into an
+                // Error, but a panic is still a bug) and in bounded time.
+                let guid = file.guid.clone();
                 no_panic("GearPairFmu::from_model_file", &case, || GearPairFmu::from_model_file(file).map(|_| ()))?
                     .ok();
+                if CString::new(guid.clone()).is_ok() {
+                    let dir =
+                        resources().dir.parent().unwrap().join(format!("edited-{:?}", std::thread::current().id()));
+                    std::fs::create_dir_all(&dir).unwrap();
+                    std::fs::write(dir.join(FILE_NAME), &bytes).unwrap();
+                    let name = unique_name("model-file");
+                    let t0 = Instant::now();
+                    let c = no_panic("fmi2Instantiate", &case, || instantiate_at(&name, &dir, &guid))?;
+                    if c.is_null() {
+                        stat("model_file_decoder", "instantiate refused");
+                    } else {
+                        let calls = no_panic("FMI calls on an edited model file", &case, || {
+                            let mut statuses = vec![
+                                fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0),
+                                fmi2EnterInitializationMode(c),
+                                fmi2ExitInitializationMode(c),
+                            ];
+                            statuses.push(fmi2DoStep(c, 0.0, 1e-4, 1));
+                            let vrs: Vec<u32> =
+                                variables().iter().filter(|v| v.kind == "Real").map(|v| v.value_reference).collect();
+                            let mut values = vec![0.0; vrs.len()];
+                            statuses.push(fmi2GetReal(c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr()));
+                            fmi2FreeInstance(c);
+                            statuses
+                        })?;
+                        prop_assert!(calls.iter().all(|s| status_is_valid(*s)), "statuses {calls:?}");
+                        stat(
+                            "model_file_decoder",
+                            if calls[3] == OK { "instance stepped" } else { "instance refused" },
+                        );
+                    }
+                    prop_assert!(t0.elapsed() < Duration::from_secs(2), "took {:?}", t0.elapsed());
+                    let logs = take_logs(&name);
+                    prop_assert!(!logs.iter().any(|l| l.contains("panic")), "a panic inside the FMU: {logs:?}");
+                }
             }
         }
         Ok(())
@@ -1199,4 +1238,22 @@ fn regression_restored_state_is_held_to_the_stability_contract() {
             fmi2FreeInstance(c);
         }
     }
+}
+
+/// Found by `fuzz_model_file_decoder`: a model file with a valid checksum but an empty force
+/// table instantiated, and fmi2ExitInitializationMode panicked (divide by zero, turned into an
+/// Error by the guard). Such data is now refused at fmi2Instantiate with a log line.
+#[test]
+fn regression_malformed_lumped_model_data_is_refused_at_instantiate() {
+    let mut file = ModelFile::from_bytes(&resources().model_bin).unwrap();
+    let ModelKind::Lumped(mesh) = &mut file.model else { unreachable!() };
+    mesh.drive.force_levels_n.clear();
+    let dir = resources().dir.parent().unwrap().join("malformed");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(FILE_NAME), file.to_bytes()).unwrap();
+    let name = unique_name("malformed");
+    let c = instantiate_at(&name, &dir, &file.guid);
+    assert!(c.is_null());
+    let logs = take_logs(&name);
+    assert!(logs.iter().any(|l| l.contains("fmi2Instantiate: the drive mesh law is malformed")), "{logs:?}");
 }
