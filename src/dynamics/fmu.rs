@@ -130,7 +130,10 @@ pub const LUMPED_DEFAULT_MAX_STEP_S: f64 = 1e-5;
 impl GearPairFmu {
     pub fn from_model_file(file: ModelFile) -> Result<Self, String> {
         let physics = match file.model {
-            ModelKind::Lumped(mesh) => Physics::Lumped(mesh),
+            ModelKind::Lumped(mesh) => {
+                check_lumped_mesh(&mesh)?;
+                Physics::Lumped(mesh)
+            }
             ModelKind::PmorHertz(model) => {
                 let place = PairPlacement::new(&model.pair);
                 Physics::PmorHertz { model, place }
@@ -244,6 +247,45 @@ impl GearPairFmu {
 /// A longer communication step is refused before any work, naming h, max_step and the bound.
 pub const MAX_SUBSTEPS_LUMPED: f64 = 4e7;
 pub const MAX_SUBSTEPS_PMOR: f64 = 1e5;
+
+/// The lumped model data as read from a model file: the shape and ranges `LumpedMesh::from_pair`
+/// produces, so that a damaged (or hand-made) file is refused at instantiate with a message
+/// instead of failing inside a call.
+fn check_lumped_mesh(m: &LumpedMesh) -> Result<(), String> {
+    let positive = [
+        m.base_radius_1_m,
+        m.base_radius_2_m,
+        m.inertia_1_kgm2,
+        m.inertia_2_kgm2,
+        m.base_pitch_m,
+        m.reference_force_n,
+        m.reference_stiffness_n_per_m,
+    ];
+    if m.teeth_1 == 0 || m.teeth_2 == 0 || !positive.iter().all(|x| x.is_normal() && *x > 0.0) {
+        return Err(
+            "the lumped model data holds a zero tooth count or a non-positive radius, inertia, pitch or reference"
+                .into(),
+        );
+    }
+    if ![m.backlash_m, m.roll_offset_m].iter().all(|x| x.is_finite()) || m.backlash_m < 0.0 {
+        return Err("the lumped model data holds a non-finite roll offset or a negative backlash".into());
+    }
+    if !(0.0..1.0).contains(&m.mesh_damping_ratio) {
+        return Err(format!("the lumped model data's mesh damping ratio {} is not in [0, 1)", m.mesh_damping_ratio));
+    }
+    m.drive.check("drive")?;
+    m.coast.check("coast")?;
+    if m.drive_pairs.len() != m.drive.rows() || m.coast_pairs.len() != m.coast.rows() {
+        return Err(format!(
+            "the lumped model data has {}/{} contact-pair counts for {}/{} law rows",
+            m.drive_pairs.len(),
+            m.coast_pairs.len(),
+            m.drive.rows(),
+            m.coast.rows()
+        ));
+    }
+    Ok(())
+}
 
 /// max_step: finite, > 0 and normal (a subnormal step is a hang, not a setting).
 fn max_step(value: f64) -> Result<f64, String> {
@@ -422,12 +464,16 @@ impl Model for GearPairFmu {
         }
     }
 
-    fn check_state(&self, s: &GearPairState) -> Result<(), String> {
+    fn check_state(&self, s: &GearPairState, initialized: bool) -> Result<(), String> {
         // The parameters, with the rules of set_real.
         max_step(s.max_step_s)?;
         self.inertia("inertia_1", 0, s.params.inertia_1_kgm2)?;
         self.inertia("inertia_2", 1, s.params.inertia_2_kgm2)?;
         Self::mesh_damping_ratio(s.params.mesh_damping_ratio)?;
+        // After initialization, the stability contract of exit_initialization holds too.
+        if initialized {
+            self.check_stability(s)?;
+        }
         // Inputs, start values and the mechanical state: finite (set_reals refuses the rest).
         finite("tau_1/tau_2", &s.torques_nm)?;
         let l = |m: &LumpedState| [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j];

@@ -53,6 +53,31 @@ impl MeshLaw {
         MeshLaw { base_pitch_m, force_levels_n, deflection_m, complementary_energy_j: energy }
     }
 
+    /// Checks a law read from outside (a model file): the shape `new` asserts, and finite
+    /// numbers (found by fuzzing the model-file decoder: a checksummed file with an empty force
+    /// table divided by zero in `rows`).
+    pub fn check(&self, name: &str) -> Result<(), String> {
+        let levels = self.force_levels_n.len();
+        let n = self.deflection_m.len();
+        let shape_ok = levels >= 2
+            && self.force_levels_n[0] == 0.0
+            && self.force_levels_n.windows(2).all(|w| w[1] > w[0] && w[1].is_finite())
+            && n >= levels
+            && n % levels == 0
+            && self.complementary_energy_j.len() == n;
+        if !shape_ok {
+            return Err(format!(
+                "the {name} mesh law is malformed: {levels} force levels (need ≥ 2, from 0, increasing), {n} deflections, {} energies",
+                self.complementary_energy_j.len()
+            ));
+        }
+        let finite = self.deflection_m.iter().chain(&self.complementary_energy_j).all(|x| x.is_finite());
+        if !(finite && self.base_pitch_m.is_normal() && self.base_pitch_m > 0.0) {
+            return Err(format!("the {name} mesh law holds a non-finite value or a non-positive base pitch"));
+        }
+        Ok(())
+    }
+
     pub fn rows(&self) -> usize {
         self.deflection_m.len() / self.force_levels_n.len()
     }

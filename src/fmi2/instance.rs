@@ -34,7 +34,7 @@ pub const LOG_CATEGORIES: [&str; 4] = ["logStatusError", "logStatusWarning", "lo
 const LOG_DISCARD: usize = 3;
 
 /// What an FMU state holds: the model's state, the time and the phase it was taken in.
-#[derive(Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Snapshot<S> {
     pub state: S,
     pub time: f64,
@@ -265,7 +265,11 @@ impl<M: Model> Instance<M> {
         if snapshot.phase == Phase::Fatal {
             return Err("the FMU state was taken in phase Fatal, which no FMU state can be".into());
         }
-        self.model.check_state(&snapshot.state)
+        // A state taken after initialization must also pass what fmi2ExitInitializationMode
+        // checks (found while fuzzing the state decoder: a forged StepComplete state with
+        // max_step above the stability limit was restored and stepped).
+        let initialized = matches!(snapshot.phase, Phase::StepComplete | Phase::StepFailed | Phase::Terminated);
+        self.model.check_state(&snapshot.state, initialized)
     }
 
     /// Restores a snapshot after [`Self::check_snapshot`]; a refused one changes nothing.

@@ -44,8 +44,9 @@ pub trait Model: Sized + Send + 'static {
     /// time with this state's settings (e.g. too many sub-steps); the message says why.
     fn check_step(&self, state: &Self::State, h: f64) -> Result<(), String>;
     /// Checks a state restored from an FMU state (possibly deserialized from outside) with the
-    /// rules `set_real` applies to each parameter, and that it fits this model.
-    fn check_state(&self, state: &Self::State) -> Result<(), String>;
+    /// rules `set_real` applies to each parameter, and that it fits this model; `initialized`
+    /// (a state taken after fmi2ExitInitializationMode) adds the checks that call makes.
+    fn check_state(&self, state: &Self::State, initialized: bool) -> Result<(), String>;
     /// Advances from the current time by h (> 0) with the inputs held.
     fn do_step(&self, state: &mut Self::State, h: f64) -> Result<(), String>;
 }

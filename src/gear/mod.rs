@@ -154,11 +154,25 @@ impl GearPair {
     }
 }
 
+/// A positive, finite and normal number (a subnormal one is no physical value: it underflows to
+/// zero in the first product).
 fn positive(field: &str, value: f64) -> Result<f64, SpecError> {
-    if value.is_finite() && value > 0.0 {
+    if value.is_normal() && value > 0.0 {
         Ok(value)
     } else {
         Err(invalid(field, format!("must be a positive finite number, got {value}")))
+    }
+}
+
+/// [`positive`], converted to SI by `scale`; the SI value must be positive, finite and normal
+/// too (found by fuzzing: `face_width_mm = 5e-324` became 0 m and `youngs_modulus_gpa = 1e300`
+/// became inf Pa, and both specs were accepted).
+fn positive_si(field: &str, value: f64, scale: f64) -> Result<f64, SpecError> {
+    let si = positive(field, value)? * scale;
+    if si.is_normal() {
+        Ok(si)
+    } else {
+        Err(invalid(field, format!("{value} is out of range: it is {si} in SI units")))
     }
 }
 
@@ -175,7 +189,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         }
     }
     let rack = &spec.rack;
-    let mn = positive("rack.module_mm", rack.module_mm)? * 1e-3;
+    let mn = positive_si("rack.module_mm", rack.module_mm, 1e-3)?;
     let alpha_n_deg = positive("rack.pressure_angle_deg", rack.pressure_angle_deg)?;
     if alpha_n_deg >= 45.0 {
         return Err(invalid("rack.pressure_angle_deg", "must be below 45°"));
@@ -193,13 +207,13 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         ));
     }
     let mat = &spec.material;
-    let e = positive("material.youngs_modulus_gpa", mat.youngs_modulus_gpa)? * 1e9;
+    let e = positive_si("material.youngs_modulus_gpa", mat.youngs_modulus_gpa, 1e9)?;
     let nu = mat.poisson_ratio;
     if !(0.0..0.5).contains(&nu) {
         return Err(invalid("material.poisson_ratio", "must be in [0, 0.5)"));
     }
     let rho = positive("material.density_kg_m3", mat.density_kg_m3)?;
-    let b = positive("mounting.face_width_mm", spec.mounting.face_width_mm)? * 1e-3;
+    let b = positive_si("mounting.face_width_mm", spec.mounting.face_width_mm, 1e-3)?;
     if !(spec.mounting.backlash_mm.is_finite() && spec.mounting.backlash_mm >= 0.0) {
         return Err(invalid("mounting.backlash_mm", "must be a finite number ≥ 0"));
     }
@@ -245,7 +259,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         // The generated involute starts where the rack's straight flank ends.
         let u_form = r * alpha_t.sin() - h_lim / alpha_t.sin();
         let form_radius = rb.hypot(u_form.max(0.0));
-        let bore = positive(&format!("{which}.bore_radius_mm"), g.bore_radius_mm)? * 1e-3;
+        let bore = positive_si(&format!("{which}.bore_radius_mm"), g.bore_radius_mm, 1e-3)?;
         if bore >= rf - mn {
             return Err(invalid(
                 &format!("{which}.bore_radius_mm"),
@@ -262,7 +276,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
             None => DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE * mn,
             Some(v) => {
                 let field = format!("{which}.tip_edge_radius_mm");
-                let v = positive(&field, v)? * 1e-3;
+                let v = positive_si(&field, v, 1e-3)?;
                 if v > 0.5 * tip_land {
                     return Err(invalid(
                         &field,
@@ -319,7 +333,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let a0 = (g1.base_radius_m + g2.base_radius_m) / alpha_w0.cos();
     let a = match spec.mounting.center_distance_mm {
         None => a0,
-        Some(a_mm) => positive("mounting.center_distance_mm", a_mm)? * 1e-3,
+        Some(a_mm) => positive_si("mounting.center_distance_mm", a_mm, 1e-3)?,
     };
     let cos_w = (g1.base_radius_m + g2.base_radius_m) / a;
     if cos_w >= 1.0 {
@@ -366,6 +380,27 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     }
     let pbt = PI * mt * alpha_t.cos();
     let eps_alpha = (path_end - path_start) / pbt;
+    // Every check above is a comparison that NaN passes: sizes so large that squares overflow
+    // (found by fuzzing: module_mm = 3e240 gave ε_α = NaN and was accepted) are refused here.
+    let derived = [
+        ("center distance", a),
+        ("line of action", loa),
+        ("path of contact start", path_start),
+        ("path of contact end", path_end),
+        ("base pitch", pbt),
+        ("transverse contact ratio", eps_alpha),
+        ("backlash", backlash_loa),
+        ("gear 1 tip radius", g1.tip_radius_m),
+        ("gear 2 tip radius", g2.tip_radius_m),
+        ("gear 1 form radius", g1.form_radius_m),
+        ("gear 2 form radius", g2.form_radius_m),
+    ];
+    if let Some((what, x)) = derived.iter().find(|(_, x)| !x.is_finite()) {
+        return Err(invalid(
+            "rack.module_mm",
+            format!("the pair's {what} is {x}: the sizes of this spec are out of floating-point range"),
+        ));
+    }
     if eps_alpha < 1.0 {
         return Err(invalid(
             "mounting.center_distance_mm",
@@ -393,7 +428,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         youngs_modulus_pa: e,
         poisson_ratio: nu,
         density_kg_m3: rho,
-        yield_strength_pa: positive("material.yield_strength_mpa", mat.yield_strength_mpa)? * 1e6,
+        yield_strength_pa: positive_si("material.yield_strength_mpa", mat.yield_strength_mpa, 1e6)?,
         mesh_damping_ratio: zeta,
         rack_dedendum_coefficient: hf,
         hertz_contact: spec.lumped.hertz_contact,
