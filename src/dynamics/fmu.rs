@@ -198,8 +198,6 @@ impl GearPairFmu {
 }
 
 impl GearPairFmu {
-    /// An inertia parameter: positive; for the PMOR-Hertz model not below the FE gear's own
-    /// (the excess is rigid inertia at the bore: the hub and shaft share).
     /// The stability contract: max_step must lie within RK4's stability limit of the stiffest
     /// dynamics the model retains (lumped: the mesh mode at the law's largest tangent stiffness
     /// with these inertias and this damping; PMOR-Hertz: the pair linearized at 4 × its ROM
@@ -221,6 +219,8 @@ impl GearPairFmu {
         }
     }
 
+    /// An inertia parameter: positive; for the PMOR-Hertz model not below the FE gear's own
+    /// (the excess is rigid inertia at the bore: the hub and shaft share).
     fn inertia(&self, name: &str, gear: usize, value: f64) -> Result<f64, String> {
         let value = positive(name, value)?;
         if let Physics::PmorHertz { model, .. } = &self.physics {
@@ -232,6 +232,21 @@ impl GearPairFmu {
             }
         }
         Ok(value)
+    }
+
+    fn max_substeps(&self) -> f64 {
+        match &self.physics {
+            Physics::Lumped(_) => MAX_SUBSTEPS_LUMPED,
+            Physics::PmorHertz { .. } => MAX_SUBSTEPS_PMOR,
+        }
+    }
+
+    fn mesh_damping_ratio(value: f64) -> Result<f64, String> {
+        if (0.0..1.0).contains(&value) {
+            Ok(value)
+        } else {
+            Err(format!("mesh_damping_ratio must be in [0, 1), got {value}"))
+        }
     }
 }
 
@@ -300,23 +315,6 @@ fn finite(name: &str, values: &[f64]) -> Result<(), String> {
     match values.iter().find(|x| !x.is_finite()) {
         Some(x) => Err(format!("{name} holds a non-finite value {x}")),
         None => Ok(()),
-    }
-}
-
-impl GearPairFmu {
-    fn max_substeps(&self) -> f64 {
-        match &self.physics {
-            Physics::Lumped(_) => MAX_SUBSTEPS_LUMPED,
-            Physics::PmorHertz { .. } => MAX_SUBSTEPS_PMOR,
-        }
-    }
-
-    fn mesh_damping_ratio(value: f64) -> Result<f64, String> {
-        if (0.0..1.0).contains(&value) {
-            Ok(value)
-        } else {
-            Err(format!("mesh_damping_ratio must be in [0, 1), got {value}"))
-        }
     }
 }
 

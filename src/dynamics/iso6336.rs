@@ -49,7 +49,12 @@ pub fn mesh_stiffness_c_gamma_alpha(pair: &GearPair) -> f64 {
 /// c_γα at a specific load w = F_t·K_A/b (N/mm): below 100 N/mm ISO 6336-1 (Sect. 9.1, the
 /// note to Eq. 41) scales c′ by (w/100)^0.25 — the contact softens at light load.
 pub fn mesh_stiffness_c_gamma_alpha_at(pair: &GearPair, specific_load_n_per_mm: f64) -> f64 {
-    mesh_stiffness_c_gamma_alpha(pair) * (specific_load_n_per_mm / 100.0).min(1.0).powf(0.25)
+    mesh_stiffness_c_gamma_alpha(pair) * light_load_factor(specific_load_n_per_mm)
+}
+
+/// ISO's (w/100)^0.25 below 100 N/mm, 1 above.
+fn light_load_factor(specific_load_n_per_mm: f64) -> f64 {
+    (specific_load_n_per_mm / 100.0).min(1.0).powf(0.25)
 }
 
 /// Converts a stiffness per face width in N/(mm·µm) to a total stiffness in N/m.
@@ -60,7 +65,7 @@ pub fn to_newton_per_metre(c_n_per_mm_um: f64, face_width_m: f64) -> f64 {
 /// c′ at a specific load w (N/mm), with the same (w/100)^0.25 light-load factor as
 /// [`mesh_stiffness_c_gamma_alpha_at`].
 pub fn single_stiffness_at(pair: &GearPair, specific_load_n_per_mm: f64) -> f64 {
-    single_stiffness(pair) * (specific_load_n_per_mm / 100.0).min(1.0).powf(0.25)
+    single_stiffness(pair) * light_load_factor(specific_load_n_per_mm)
 }
 
 /// Double-contact stiffness over c′ that c_γα implies for a spur pair whose stiffness is c′ over

@@ -200,8 +200,11 @@ pub fn pmor_hertz(
         .transpose()
         .solve_upper_triangular(&nalgebra::DMatrix::identity(n, n))
         .ok_or("singular Cholesky factor of the reduced stiffness")?;
-    let basis = &basis * Mat::from_fn(n, n, |i, j| inverse_lt[(i, j)]);
-    let stiffness = super::svd::projected_stiffness(&model.stiffness, &basis);
+    let correction = Mat::from_fn(n, n, |i, j| inverse_lt[(i, j)]);
+    let basis = &basis * &correction;
+    // The corrected stiffness from the formed K_sv in the small space (Tᵀ·K_sv·T), not by a
+    // second projection of the FE stiffness: the same product, n_sv³ instead of n_FE·n_sv².
+    let stiffness = correction.transpose() * &scaled * &correction;
     let off_identity = (0..n)
         .flat_map(|i| (0..n).map(move |j| (i, j)))
         .map(|(i, j)| (stiffness[(i, j)] - if i == j { 1.0 } else { 0.0 }).abs())
