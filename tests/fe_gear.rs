@@ -88,6 +88,50 @@ fn rotation_by_one_pitch_maps_nodes_onto_nodes() {
     assert!(worst < 1e-12, "largest mismatch {worst} m");
 }
 
+/// The half turn about the x axis maps the mesh onto itself (what the coast flanks of the
+/// PMOR-Hertz model rest on): an involution of the nodes, flank nodes of tooth k, side s, slice l
+/// onto tooth −k, side −s, slice n − l with the normal turned likewise, and the unclamped mass
+/// and stiffness invariant under it (Kᵀ·(Hf) = H(K f) for a test field) — for a helical gear,
+/// where a mirror would swap the hand of helix.
+#[test]
+fn half_turn_about_x_maps_the_mesh_onto_itself() {
+    let p = pair("kurokawa_helical.toml");
+    let gm = mesh_gear(&p, &p.gear1, &MeshSpec::default());
+    let map = gm.half_turn_about_x().unwrap();
+    for (n, &m) in map.iter().enumerate() {
+        assert_eq!(map[m], n, "not an involution at node {n}");
+    }
+    let (z, slices) = (gm.teeth, MeshSpec::default().axial_slices);
+    let mut flank_checked = 0;
+    for f in &gm.flank_nodes {
+        let image =
+            gm.flank_nodes.iter().find(|g| g.node == map[f.node]).expect("a flank node's image is a flank node");
+        assert_eq!(image.tooth, (z - f.tooth) % z);
+        assert_eq!(image.side, -f.side);
+        assert_eq!(image.slice, slices - f.slice);
+        let turned = [f.normal[0], -f.normal[1], -f.normal[2]];
+        assert!((0..3).all(|c| (turned[c] - image.normal[c]).abs() < 1e-9), "normal of node {}", f.node);
+        flank_checked += 1;
+    }
+    assert!(flank_checked > 100);
+    let dofs = DofMap::unclamped(gm.mesh.nodes.len());
+    let k = assembly::stiffness(&gm.mesh, &material(&p), Formulation::IncompatibleModes, &dofs);
+    let turn = |f: &[f64]| -> Vec<f64> {
+        let mut out = vec![0.0; f.len()];
+        for (n, &m) in map.iter().enumerate() {
+            out[3 * n] = f[3 * m];
+            out[3 * n + 1] = -f[3 * m + 1];
+            out[3 * n + 2] = -f[3 * m + 2];
+        }
+        out
+    };
+    let field: Vec<f64> = (0..3 * map.len()).map(|d| ((d * 7919) % 1000) as f64 * 1e-3 - 0.5).collect();
+    let (k_turned, turned_k) = (assembly::mul(&k, &turn(&field)), turn(&assembly::mul(&k, &field)));
+    let scale = turned_k.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    let worst = k_turned.iter().zip(&turned_k).fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
+    assert!(worst < 1e-9 * scale, "K is not invariant under the half turn: {worst:e} of {scale:e}");
+}
+
 /// The unclamped gear's K has the six rigid-body motions in its null space (K·r = 0).
 #[test]
 fn unclamped_gear_has_six_rigid_body_modes() {

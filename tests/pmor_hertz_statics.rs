@@ -23,7 +23,7 @@
 //! resolution").
 
 use gearfmu::contact::hertz::ApproachLaw;
-use gearfmu::contact::mesh_kinematics::PairPlacement;
+use gearfmu::contact::mesh_kinematics::{Flank, PairPlacement};
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::LumpedMesh;
 use gearfmu::fe::clamped_gear::ClampedGear;
@@ -62,7 +62,7 @@ fn reduce(p: &GearPair) -> [ReducedGear; 2] {
         let factor = model.factorize().unwrap();
         let z = gear.teeth as i64;
         let teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
-        let grid = FlankGrid::contact_flank(&model.mesh, i, &teeth).unwrap();
+        let grid = FlankGrid::contact_flank(&model.mesh, i, Flank::Drive, &teeth).unwrap();
         let (reduced, _, report) = pmor_hertz(&model, &factor, grid, 3e-3, 0.999, |_| {}).unwrap();
         println!("gear {}: n_c {} → n_sv {} (retained {:.4})", i + 1, report.n_c, report.n_sv, report.retained);
         hertz.push(reduced);

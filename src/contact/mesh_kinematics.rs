@@ -28,11 +28,48 @@
 //! just leaving), a tip corner can still reach the mating flank once the teeth deflect: the
 //! extended contact that shortens the single-contact zone under load. Each candidate is checked
 //! and the deepest one per pair and axial section is kept.
+//!
+//! Coast flanks. A half turn about the line of centres (the world x axis in the mid-plane),
+//! (x, y, z) → (x, −y, −z), maps each gear onto itself: every tooth is symmetric about its axis
+//! and a rotation keeps the hand of helix. It takes tooth k to tooth −k, each tooth's clockwise
+//! flank to its counter-clockwise one, and so the pair's coast flanks to its drive flanks. The
+//! coast contact at (θ₁, θ₂) is therefore the drive contact of the half-turned pose
+//! ([`PairPlacement::half_turn_angles`]), searched by the same code; the tooth thinning that the
+//! profiles do not carry (`mounting.backlash_mm`) turns gear 1 back in that pose.
 
 use super::hertz::{ApproachLaw, Body, LineContact};
 use crate::gear::involute::inv;
 use crate::gear::{Gear, GearPair};
 use std::f64::consts::PI;
+
+/// Which flanks of the pair touch: the drive flanks (gear 1's counter-clockwise, gear 2's
+/// clockwise: transmission error ≥ 0 closes them) or the coast flanks across the backlash.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flank {
+    Drive,
+    Coast,
+}
+
+impl Flank {
+    pub const BOTH: [Flank; 2] = [Flank::Drive, Flank::Coast];
+
+    /// +1 on the drive flanks, −1 on the coast flanks: the sign of the normal force along the
+    /// line of action (the lumped model's convention).
+    pub fn sign(self) -> f64 {
+        match self {
+            Flank::Drive => 1.0,
+            Flank::Coast => -1.0,
+        }
+    }
+
+    /// The flank side (`fe::gear_mesh::FlankNode::side`) of gear `gear` (0, 1) that touches.
+    pub fn side(self, gear: usize) -> i8 {
+        match (self, gear) {
+            (Flank::Drive, 0) | (Flank::Coast, 1) => 1,
+            _ => -1,
+        }
+    }
+}
 
 /// Which point of which flank touches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -110,6 +147,9 @@ pub struct PairPlacement {
     twist: [f64; 2],
     /// s = +1 if gear 1 is right-handed, −1 if left-handed.
     hand: f64,
+    /// The part of the backlash that the meshed profiles do not carry (tooth thinning,
+    /// `mounting.backlash_mm`), along the line of action (m): it opens the coast gap.
+    thinning_loa_m: f64,
 }
 
 fn rot(a: f64, p: [f64; 2]) -> [f64; 2] {
@@ -137,7 +177,11 @@ impl PairPlacement {
         let tan_b = pair.helix_angle_rad.tan();
         let hand = g1.helix_hand.sign();
         debug_assert_eq!(g2.helix_hand, g1.helix_hand.opposite());
+        // The half turn closes the coast flanks at the profiles' own backlash: one base pitch
+        // less the two tooth thicknesses at the operating pitch circles, along the LOA.
+        let profile_backlash = pair.base_pitch_m - 2.0 * (g1.base_radius_m * psi_w1 + g2.base_radius_m * psi_w2);
         PairPlacement {
+            thinning_loa_m: pair.backlash_loa_m - profile_backlash,
             pair: pair.clone(),
             gamma: [-psi_w1, psi_w2],
             flank_constant: [
@@ -292,6 +336,48 @@ impl PairPlacement {
         best
     }
 
+    /// The shaft angles of the half-turned pose: its drive flanks are where this pose's coast
+    /// flanks are. Gear i at θᵢ (placed at θᵢ + γᵢ) lands at −θᵢ − 2γᵢ; its tooth k is this
+    /// pose's tooth −k, its axial section s this pose's section n − 1 − s (world z → −z).
+    /// Gear 1 is turned back one pitch more, so that the half-turned pair j is again tooth j
+    /// with tooth j (the exact image pairs gear 2's tooth j with gear 1's j − 1); its tooth k is
+    /// then this pose's tooth 1 − k ([`PairPlacement::half_turn_teeth`]).
+    /// The tooth thinning that the profiles do not carry turns gear 1 back by its arc on the
+    /// base circle: an involute thinned along the base circle is the same involute turned, so
+    /// the pose touches where the thinned teeth would, with the geometry (contact point, radii,
+    /// tip corners) of touching teeth.
+    pub fn half_turn_angles(&self, theta: [f64; 2]) -> [f64; 2] {
+        let g1 = &self.pair.gear1;
+        let pitch1 = 2.0 * PI / g1.teeth as f64;
+        [
+            -theta[0] - 2.0 * self.gamma[0] - pitch1 - self.thinning_loa_m / g1.base_radius_m,
+            -theta[1] - 2.0 * self.gamma[1],
+        ]
+    }
+
+    /// This pose's FE teeth of the half-turned pose's teeth (gear 1, gear 2): 1 − k and −k.
+    pub fn half_turn_teeth(&self, teeth: [usize; 2]) -> [usize; 2] {
+        let z = [self.pair.gear1.teeth as i64, self.pair.gear2.teeth as i64];
+        [(1 - teeth[0] as i64).rem_euclid(z[0]) as usize, (-(teeth[1] as i64)).rem_euclid(z[1]) as usize]
+    }
+
+    /// The contact of tooth pair j on the given flanks, searched in the pose where they are the
+    /// drive flanks (`section` and `z` of that pose): this pose for the drive flanks, the
+    /// half-turned one for the coast flanks.
+    pub fn flank_contact(
+        &self,
+        flank: Flank,
+        theta: [f64; 2],
+        j: i64,
+        section: usize,
+        z: f64,
+    ) -> Option<SectionContact> {
+        match flank {
+            Flank::Drive => self.section_contact(theta, j, section, z),
+            Flank::Coast => self.section_contact(self.half_turn_angles(theta), j, section, z),
+        }
+    }
+
     /// The tooth pairs j that can touch anywhere along the face for θ₂ in one angular pitch
     /// [0, 2π/z₂), extended contact included (a margin of half a base pitch at both ends).
     pub fn pairs_in_reach(&self) -> std::ops::RangeInclusive<i64> {
@@ -361,6 +447,70 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// Closed forms for the coast flanks (the half turn): they close when the transmission error
+    /// reaches −j, j the spec's backlash along the LOA (the profiles' own, from `GearPair`'s
+    /// tooth thicknesses, plus the thinning), with penetration cos β_b·(−TE − j) on the path of
+    /// contact; and there the contact point, half-turned back, lies on the clockwise flank of
+    /// gear 1's tooth 1 − k, thinned: at polar angle 2π(1 − k)/z₁ − ψ(r) + j_thin/r_b1
+    /// (+ twist), ψ the tooth's half-thickness angle — the tooth's shape alone.
+    #[test]
+    fn coast_flanks_close_at_the_backlash() {
+        let cases = [
+            ("kurokawa_spur.toml", HelixHand::Right),
+            ("kurokawa_helical.toml", HelixHand::Right),
+            ("kurokawa_helical.toml", HelixHand::Left),
+        ];
+        for (file, hand) in cases {
+            for thinning_mm in [0.0, 0.1] {
+                let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
+                let mut spec = PairSpec::load(&path).unwrap();
+                spec.rack.helix_hand = hand;
+                spec.mounting.backlash_mm = thinning_mm;
+                let p = GearPair::from_spec(&spec).unwrap();
+                let place = PairPlacement::new(&p);
+                assert!((place.thinning_loa_m - thinning_mm * 1e-3 / p.base_helix_angle_rad.cos()).abs() < 1e-12);
+                let (rb1, rb2) = (p.gear1.base_radius_m, p.gear2.base_radius_m);
+                let cos_bb = p.base_helix_angle_rad.cos();
+                let mut checked = 0;
+                for theta2 in [0.0, 0.013, 0.03, 0.05, 0.08, 0.11] {
+                    let delta = 2e-6;
+                    let theta1 = (rb2 * theta2 - p.backlash_loa_m - delta) / rb1;
+                    for j in -3..=3 {
+                        for z in [-0.004, 0.0, 0.005] {
+                            let Some(c) = place.flank_contact(Flank::Coast, [theta1, theta2], j, 0, z) else {
+                                continue;
+                            };
+                            if c.kind != ContactKind::Conjugate {
+                                continue;
+                            }
+                            assert!(
+                                (c.rigid_penetration_m - cos_bb * delta).abs() < 1e-10,
+                                "{file} {hand:?} j {j} z {z}: {:e} vs {:e}",
+                                c.rigid_penetration_m,
+                                cos_bb * delta
+                            );
+                            // At the closing angle, gear 2's contact point is on gear 1's coast
+                            // flank, thinned: turned towards the tooth axis by j_thin/r_b1.
+                            let theta1 = (rb2 * theta2 - p.backlash_loa_m) / rb1;
+                            let turned = place.half_turn_angles([theta1, theta2]);
+                            let w = place.to_world(1, turned[1], place.flank_point(1, j, c.radius_m[1], z));
+                            let own = place.to_own(0, theta1, [w[0], -w[1]]);
+                            let r = own[0].hypot(own[1]);
+                            let tooth = place.half_turn_teeth(c.teeth)[0] as f64;
+                            let flank = 2.0 * PI * tooth / p.gear1.teeth as f64 + place.twist[0] * -z
+                                - p.gear1.half_thickness_angle(r, p.transverse_pressure_angle_rad)
+                                + place.thinning_loa_m / rb1;
+                            let off = wrap(own[1].atan2(own[0]) - flank, 1) * r;
+                            assert!(off.abs() < 1e-10, "{file} {hand:?} j {j} z {z}: off the coast flank by {off:e} m");
+                            checked += 1;
+                        }
+                    }
+                }
+                assert!(checked > 20, "{file}: {checked}");
             }
         }
     }

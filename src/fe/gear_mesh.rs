@@ -81,6 +81,52 @@ pub struct GearMesh {
     pub nodes_per_sector: usize,
 }
 
+impl GearMesh {
+    /// The node each node lands on under the half turn about the gear's x axis,
+    /// (x, y, z) → (x, −y, −z). Every tooth is meshed symmetric about its axis and the face
+    /// about its mid-plane, and a rotation keeps the hand of helix, so the mesh maps onto itself:
+    /// tooth k onto tooth −k, side ±1 onto ∓1 (the coast flanks onto the drive flanks).
+    /// `Err` if some node has no image (a mesh that is not symmetric).
+    pub fn half_turn_about_x(&self) -> Result<Vec<usize>, String> {
+        // Nodes are at least micrometres apart; positions are matched on a 10 nm grid, with
+        // the neighbouring cells searched for images that round to the other side of a cell.
+        const CELL_M: f64 = 1e-8;
+        let key = |p: [f64; 3]| p.map(|v| (v / CELL_M).round() as i64);
+        let mut cells: std::collections::HashMap<[i64; 3], Vec<usize>> = std::collections::HashMap::new();
+        for (n, p) in self.mesh.nodes.iter().enumerate() {
+            cells.entry(key(*p)).or_default().push(n);
+        }
+        let size = self.mesh.nodes.iter().flatten().fold(0.0_f64, |a, v| a.max(v.abs()));
+        self.mesh
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(n, p)| {
+                let image = [p[0], -p[1], -p[2]];
+                let k = key(image);
+                let mut best: Option<(f64, usize)> = None;
+                for d in 0..27 {
+                    let cell = [k[0] + d % 3 - 1, k[1] + (d / 3) % 3 - 1, k[2] + d / 9 - 1];
+                    for &m in cells.get(&cell).into_iter().flatten() {
+                        let q = self.mesh.nodes[m];
+                        let dist =
+                            ((q[0] - image[0]).powi(2) + (q[1] - image[1]).powi(2) + (q[2] - image[2]).powi(2)).sqrt();
+                        if best.map_or(true, |b| dist < b.0) {
+                            best = Some((dist, m));
+                        }
+                    }
+                }
+                match best {
+                    Some((dist, m)) if dist <= 1e-12 * size.max(1.0) + 1e-12 => Ok(m),
+                    _ => Err(format!(
+                        "node {n} at {p:?} has no image under the half turn about x: the mesh is not symmetric"
+                    )),
+                }
+            })
+            .collect()
+    }
+}
+
 /// The transverse section of one sector: node positions (r, φ) and the index layout.
 struct Sector {
     /// (r, φ) of the body nodes, row-major (rim rows × angular columns, the last column excluded:

@@ -4,16 +4,23 @@
 //! Per gear: the lowest fixed-bore eigenmodes Φ (taken whole clusters of the cyclic spectrum, so
 //! that span Φ is invariant under a one-tooth rotation P; the residual is measured), the global
 //! contact shapes S(ϑ_s, T_j) from PMOR-Hertz statics over one mesh cycle, made residual against
-//! Φ (Eq. 14) and mass-orthonormal per sample, closed periodically (S_{s+n_θ} = P·S_s), and every
-//! Gram product that the floating-frame Lagrangian needs. Nothing O(n_FE) leaves this module.
+//! Φ (Eq. 14) and of unit modal mass per sample, closed periodically (S_{s+n_θ} = P·S_s), and
+//! every Gram product that the floating-frame Lagrangian needs. Nothing O(n_FE) leaves this
+//! module.
+//!
+//! Each sample has a shape loaded on the drive flanks and one loaded on the coast flanks (the
+//! back-flank contact across the backlash). The coast shape is the drive statics of the pair
+//! turned half a turn about its line of centres (`PairPlacement::half_turn_angles`), turned back
+//! onto the gear by the mesh's own half turn (`GearMesh::half_turn_about_x`): no second static
+//! solver, no second reduction.
 
 use super::flank::FlankGrid;
 use super::reductor::{pmor_hertz, Reconstructor, ReducedGear};
 use super::statics::{ContactModel, StaticModel};
 use crate::contact::hertz::ApproachLaw;
-use crate::contact::mesh_kinematics::PairPlacement;
+use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 use crate::dynamics::pmor::model::{
-    Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
+    FlankRows, Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
 };
 use crate::fe::assembly::{self, DofMap};
 use crate::fe::clamped_gear::ClampedGear;
@@ -207,7 +214,7 @@ pub fn build_dynamic_model(
         progress(format!("gear {}: FE model", i + 1));
         let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
         let factor = model.factorize()?;
-        let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, &place, 0)?;
+        let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
         progress(format!("gear {}: global attachment modes ({} flank nodes)", i + 1, grid.len()));
         let (reduced, reconstructor, report) =
             pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
@@ -256,6 +263,53 @@ pub fn build_dynamic_model(
         .map(|&(t, s)| statics.solve(pitch2 * s as f64 / n_theta as f64, options.rom_torques_nm[t]))
         .collect::<Result<Vec<_>, String>>()?;
     let case = |t: usize, s: usize| &cases[t * (n_theta + 1) + s];
+
+    // The coast shapes: each gear's sample s loaded on its coast flanks is the drive statics of
+    // the half-turned pose (`PairPlacement::half_turn_angles`), turned back onto the gear. Gear
+    // i sits at its sample angle in that pose (gear 2: θ₂ = s·pitch₂/n_θ; gear 1: θ₁ =
+    // s·pitch₁/n_θ less the static TE, as the drive samples sit at it plus the TE), so each gear
+    // has its own analyses. The pose is wrapped into gear 2's reference pitch, where the
+    // statics search, and its field turned on by the whole teeth it was wrapped by.
+    progress(format!(
+        "static contact, coast flanks: 2 × {} angles × {} torques",
+        n_theta + 1,
+        options.rom_torques_nm.len()
+    ));
+    let rb = [pair.gear1.base_radius_m, pair.gear2.base_radius_m];
+    let pitch = [2.0 * std::f64::consts::PI / pair.gear1.teeth as f64, pitch2];
+    let half_turned_theta2 = |i: usize, s: usize| -> f64 {
+        let sample = pitch[i] * s as f64 / n_theta as f64;
+        if i == 0 {
+            rb[0] * place.half_turn_angles([sample, 0.0])[0] / rb[1]
+        } else {
+            place.half_turn_angles([0.0, sample])[1]
+        }
+    };
+    let coast_jobs: Vec<(usize, usize, usize)> = (0..2)
+        .flat_map(|i| (0..options.rom_torques_nm.len()).flat_map(move |t| (0..=n_theta).map(move |s| (i, t, s))))
+        .collect();
+    let coast_cases: Vec<(i64, super::statics::StaticCase)> = coast_jobs
+        .par_iter()
+        .map(|&(i, t, s)| {
+            let theta2 = half_turned_theta2(i, s);
+            let wraps = (theta2 / pitch2).floor();
+            Ok((wraps as i64, statics.solve(theta2 - wraps * pitch2, options.rom_torques_nm[t])?))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    let coast_field = |i: usize, t: usize, s: usize, half_turn: &[usize]| -> Vec<f64> {
+        let (wraps, c) = &coast_cases[(i * options.rom_torques_nm.len() + t) * (n_theta + 1) + s];
+        // Gear 1's half-turned pose is one pitch behind the exact image (its tooth k is tooth
+        // 1 − k here): one more tooth rotation.
+        let shift = wraps + (i == 0) as i64;
+        let turned = rotate_by_teeth(&fe[i].model.mesh, &fe[i].reconstructor.displacement(&c.reduced[i]), shift);
+        let mut field = vec![0.0; turned.len()];
+        for (n, &m) in half_turn.iter().enumerate() {
+            field[3 * n] = turned[3 * m];
+            field[3 * n + 1] = -turned[3 * m + 1];
+            field[3 * n + 2] = -turned[3 * m + 2];
+        }
+        field
+    };
     let ste_m: Vec<Vec<f64>> =
         (0..options.rom_torques_nm.len()).map(|t| (0..n_theta).map(|s| case(t, s).ste_m).collect()).collect();
 
@@ -263,17 +317,23 @@ pub fn build_dynamic_model(
     let mut report_modes = Vec::new();
     let mut invariance = [0.0; 2];
     let mut inertia = [(0.0, 0.0); 2];
-    let mut closure = [0.0; 2];
+    let mut closure = [0.0_f64; 2];
     let mut residualization = [0.0; 2];
     for (i, g) in fe.iter().enumerate() {
         progress(format!("gear {}: shapes and invariants", i + 1));
         let gear = if i == 0 { &pair.gear1 } else { &pair.gear2 };
         let gm = &g.model.mesh;
         let m_times = |f: &[f64]| assembly::mul(&g.mass_full, f);
-        let n_t = options.rom_torques_nm.len();
-        // Raw shapes per sample (0..=n_θ), per torque, as full nodal fields.
+        let n_torques = options.rom_torques_nm.len();
+        let n_t = 2 * n_torques;
+        // Raw shapes per sample (0..=n_θ) as full nodal fields: per torque on the drive flanks,
+        // then per torque on the coast flanks.
+        let half_turn = gm.half_turn_about_x()?;
         let raw: Vec<Vec<Vec<f64>>> = (0..=n_theta)
-            .map(|s| (0..n_t).map(|t| g.reconstructor.displacement(&case(t, s).reduced[i])).collect())
+            .map(|s| {
+                let drive = (0..n_torques).map(|t| g.reconstructor.displacement(&case(t, s).reduced[i]));
+                drive.chain((0..n_torques).map(|t| coast_field(i, t, s, &half_turn))).collect()
+            })
             .collect();
         // Residual against Φ (Eq. 14), then each scaled to unit modal mass. The torque levels of
         // one sample are NOT orthogonalized against each other: their difference is a small,
@@ -303,8 +363,9 @@ pub fn build_dynamic_model(
         // Several torque levels must give shapes that differ: the global contact shapes of
         // PMOR-Hertz are nearly proportional to the load (the nonlinear local part is the analytic
         // Hertz law), so two levels are often the same direction to 1e-10, which makes the mass
-        // matrix singular. Refuse that instead of integrating noise.
-        if n_t > 1 {
+        // matrix singular. Refuse that instead of integrating noise. (A drive and a coast shape
+        // load opposite flanks and always differ.)
+        if n_torques > 1 {
             for (s_idx, sample) in base.iter().enumerate() {
                 let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_times(&sample[r]), &sample[c]));
                 let eig = nalgebra::SymmetricEigen::new(gram).eigenvalues;
@@ -319,11 +380,14 @@ pub fn build_dynamic_model(
                 }
             }
         }
-        // Closure check: the sample one pitch on against P·S₀ (first torque's shape).
+        // Closure check: the sample one pitch on against P·S₀ (first torque's shapes, drive and
+        // coast).
         let one_on = clean(&raw[n_theta]);
-        let p_s0 = rotate_by_teeth(gm, &base[0][0], 1);
-        let diff: Vec<f64> = one_on[0].iter().zip(&p_s0).map(|(a, b)| a - b).collect();
-        closure[i] = dot(&m_times(&diff), &diff).sqrt();
+        for column in [0, n_torques] {
+            let p_s0 = rotate_by_teeth(gm, &base[0][column], 1);
+            let diff: Vec<f64> = one_on[column].iter().zip(&p_s0).map(|(a, b)| a - b).collect();
+            closure[i] = closure[i].max(dot(&m_times(&diff), &diff).sqrt());
+        }
         // Stored samples s = −2 … n_θ + 2 with the periodic closure S_{s+n_θ} = P·S_s.
         let stored: Vec<Vec<Vec<f64>>> = (-2..=n_theta as i64 + 2)
             .map(|s| {
@@ -420,12 +484,16 @@ pub fn build_dynamic_model(
             })
             .fold(0.0, f64::max);
         // Flank rows for the online contact: the teeth that can mesh, with a margin of two pairs
-        // on each side (an anchor may lag its angle by a step near a pitch boundary).
-        let flank = FlankGrid::contact_flank_in_reach(gm, i, &place, 2)?;
-        let rows = |field: &[f64], row: usize| field[3 * flank.nodes[row / 3].0 + row % 3];
-        let flank_phi = DMatrix::from_fn(3 * flank.len(), n_k, |r, c| rows(&g.phi[c], r));
-        let flank_shapes: Vec<DMatrix<f64>> =
-            stored.iter().map(|s| DMatrix::from_fn(3 * flank.len(), n_t, |r, c| rows(&s[c], r))).collect();
+        // on each side (an anchor may lag its angle by a step near a pitch boundary); three for
+        // the coast flanks, whose reference pitch is the half turn of another interval of θ₂.
+        let flank_rows = |flank: Flank, margin: i64| -> Result<FlankRows, String> {
+            let grid = FlankGrid::contact_flank_in_reach(gm, i, flank, &place, margin)?;
+            let rows = |field: &[f64], row: usize| field[3 * grid.nodes[row / 3].0 + row % 3];
+            let phi = DMatrix::from_fn(3 * grid.len(), n_k, |r, c| rows(&g.phi[c], r));
+            let shapes = stored.iter().map(|s| DMatrix::from_fn(3 * grid.len(), n_t, |r, c| rows(&s[c], r))).collect();
+            Ok(FlankRows::new(grid, phi, shapes))
+        };
+        let flanks = [flank_rows(Flank::Drive, 2)?, flank_rows(Flank::Coast, 3)?];
 
         inertia[i] = (gram[(0, 0)], gear.inertia_kgm2);
         report_modes.push(g.eigenvalues.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect::<Vec<_>>());
@@ -445,9 +513,7 @@ pub fn build_dynamic_model(
             phi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(phic(r), phic(c))]),
             sample,
             pair: pairs,
-            flank,
-            flank_phi,
-            flank_shapes,
+            flanks,
         });
     }
     let gears: [PmorGear; 2] = gears.try_into().map_err(|_| "two gears")?;

@@ -6,6 +6,7 @@
 //!   and uniform along the section, integrated against the same shape functions into nodal
 //!   load shares (paper Sect. 4.3, Eqs. 21–22).
 
+use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 use crate::fe::gear_mesh::GearMesh;
 
 /// The contact-side flank nodes of some teeth of one gear.
@@ -27,24 +28,25 @@ pub struct FlankGrid {
 pub type Shares = Vec<(usize, f64)>;
 
 impl FlankGrid {
-    /// The contact flank of gear `gear` of a pair (0: gear 1, 1: gear 2) on `teeth`, placed as
-    /// `contact::mesh_kinematics` places the pair: gear 1 touches with its side +1 and keeps
-    /// its axial coordinate; gear 2 touches with its side −1 and is turned over, so its own z is
-    /// the world's −z and its layers come in reverse order.
-    pub fn contact_flank(gm: &GearMesh, gear: usize, teeth: &[usize]) -> Result<Self, String> {
+    /// The `flank` (drive or coast) of gear `gear` of a pair (0: gear 1, 1: gear 2) on `teeth`,
+    /// placed as `contact::mesh_kinematics` places the pair: gear 1 keeps its axial coordinate;
+    /// gear 2 is turned over, so its own z is the world's −z and its layers come in reverse
+    /// order. The drive flanks are gear 1's side +1 and gear 2's side −1 (`Flank::side`).
+    pub fn contact_flank(gm: &GearMesh, gear: usize, flank: Flank, teeth: &[usize]) -> Result<Self, String> {
         match gear {
-            0 => Self::new(gm, 1, teeth, false),
-            1 => Self::new(gm, -1, teeth, true),
+            0 | 1 => Self::new(gm, flank.side(gear), teeth, gear == 1),
             _ => Err(format!("a gear pair has gears 0 and 1, not {gear}")),
         }
     }
 
-    /// The contact flank of gear `gear` on the teeth of the tooth pairs that can touch in one
-    /// pitch (`PairPlacement::pairs_in_reach`), plus `margin` pairs on each side.
+    /// The `flank` of gear `gear` on the teeth of the tooth pairs that can touch in one pitch
+    /// (`PairPlacement::pairs_in_reach`), plus `margin` pairs on each side; for the coast flanks
+    /// the teeth the half turn maps them to (`PairPlacement::half_turn_teeth`).
     pub fn contact_flank_in_reach(
         gm: &GearMesh,
         gear: usize,
-        place: &crate::contact::mesh_kinematics::PairPlacement,
+        flank: Flank,
+        place: &PairPlacement,
         margin: i64,
     ) -> Result<Self, String> {
         let z = gm.teeth as i64;
@@ -52,11 +54,15 @@ impl FlankGrid {
         let mut teeth: Vec<usize> = Vec::new();
         for j in *reach.start() - margin..=*reach.end() + margin {
             let t = j.rem_euclid(z) as usize;
+            let t = match flank {
+                Flank::Drive => t,
+                Flank::Coast => place.half_turn_teeth([t, t])[gear],
+            };
             if !teeth.contains(&t) {
                 teeth.push(t);
             }
         }
-        Self::contact_flank(gm, gear, &teeth)
+        Self::contact_flank(gm, gear, flank, &teeth)
     }
 
     /// The flank nodes of `side` (+1 / −1) on `teeth`; `turned_over`: world z = −own z.

@@ -5,7 +5,7 @@
 use super::flank::FlankGrid;
 use super::reductor::{pmor_hertz, standard_cms, CompressionReport, ReducedGear};
 use super::statics::{ContactModel, StaticCase, StaticModel};
-use crate::contact::mesh_kinematics::PairPlacement;
+use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 use crate::fe::clamped_gear::ClampedGear;
 use crate::fe::gear_mesh::MeshSpec;
 use crate::fe::hex8::Formulation;
@@ -45,7 +45,7 @@ impl ReducedPair {
         for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
             let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
             let factor = model.factorize()?;
-            let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, &place, 0)?;
+            let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
             match method {
                 Method::PmorHertz { depth_m, p_en, .. } => {
                     let (reduced, _, report) = pmor_hertz(&model, &factor, grid, depth_m, p_en, |n| progress(i, n))?;

@@ -18,10 +18,16 @@
 //!
 //! A tooth on gear i at pitch anchor kᵢ (θᵢ = kᵢ·pitch + ϑᵢ) carries the field of reference tooth
 //! t + kᵢ: the one-tooth rotation P moves content of tooth t + 1 onto tooth t.
+//!
+//! Both flanks are searched. The coast flanks touch across the backlash (TE < −j): their
+//! contact is the drive contact of the half-turned pose (`PairPlacement::flank_contact`), read
+//! on the coast flank's own rows of Φ and of the shapes (the reduced basis carries shapes loaded
+//! on each flank), with the same law and band; its angle forces follow the half turn's reversed
+//! angles.
 
 use super::equations::Stencil;
 use super::model::PmorModel;
-use crate::contact::mesh_kinematics::{ContactKind, PairPlacement, SectionContact};
+use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
 use crate::rom::flank::Shares;
 
 /// Angle step of the central differences ∂α/∂θ at tip corners (rad).
@@ -40,14 +46,15 @@ pub struct GearPose<'a> {
 pub struct ContactLoads {
     /// Generalized forces on (θᵢ, ηᵢ), per gear.
     pub force: [Vec<f64>; 2],
-    /// Total normal force (N), loaded sections, tooth pairs carrying load.
+    /// Total normal force (N): positive on the drive flanks, negative on the coast flanks.
     pub normal_force_n: f64,
     pub pairs_in_contact: u32,
     /// Contact potential Σ W (J).
     pub potential_j: f64,
     /// Σ dP/dα (N/m), the Hertz tangent stiffness of the loaded sections in parallel.
     pub tangent_stiffness_n_per_m: f64,
-    /// Force per tooth pair (pair index j, N).
+    /// Force per tooth pair (N, negative on the coast flanks), with its pair index j in the pose
+    /// where its flanks drive (`PairPlacement::flank_contact`).
     pub pair_forces: Vec<(i64, f64)>,
 }
 
@@ -64,24 +71,52 @@ struct ElasticApproach {
     normal: [f64; 3],
 }
 
+/// A section contact on one flank: the search's result in the pose where that flank drives
+/// (`PairPlacement::flank_contact`), with the FE teeth and the axial section of this pose.
+struct Located {
+    c: SectionContact,
+    teeth: [usize; 2],
+    section: usize,
+}
+
+/// The contact of tooth pair j on `flank`, searched in section `search_section` (mid-plane
+/// `z`) of the pose where that flank drives.
+fn locate(
+    place: &PairPlacement,
+    flank: Flank,
+    theta: [f64; 2],
+    j: i64,
+    search_section: usize,
+    z: f64,
+    sections: usize,
+) -> Option<Located> {
+    let c = place.flank_contact(flank, theta, j, search_section, z)?;
+    Some(match flank {
+        Flank::Drive => Located { c, teeth: c.teeth, section: search_section },
+        Flank::Coast => Located { c, teeth: place.half_turn_teeth(c.teeth), section: sections - 1 - search_section },
+    })
+}
+
 fn elastic_approach(
     model: &PmorModel,
     i: usize,
+    flank: Flank,
     pose: &GearPose,
-    c: &SectionContact,
+    at: &Located,
 ) -> Result<ElasticApproach, String> {
     let g = &model.gears[i];
+    let grid = &g.flank(flank).grid;
     let z = g.teeth as i64;
-    let tooth = (c.teeth[i] as i64 + pose.anchor).rem_euclid(z) as usize;
-    let (shares, slopes) = g.flank.point_shares_and_slopes(tooth, c.radius_m[i], c.section).ok_or_else(|| {
-        format!("contact on reference tooth {tooth} of gear {}: outside the stored flank rows", i + 1)
+    let tooth = (at.teeth[i] as i64 + pose.anchor).rem_euclid(z) as usize;
+    let (shares, slopes) = grid.point_shares_and_slopes(tooth, at.c.radius_m[i], at.section).ok_or_else(|| {
+        format!("contact on reference tooth {tooth} of gear {} ({flank:?} flank): outside the stored flank rows", i + 1)
     })?;
     // n = m/|m| with m = Σ w·nₖ; dn/dr = (m' − n(n·m'))/|m|.
     let (mut m, mut dm) = ([0.0; 3], [0.0; 3]);
     let (mut u, mut du_dr, mut du_dtheta) = ([0.0; 3], [0.0; 3], [0.0; 3]);
     for (&(k, w), &(_, dw)) in shares.iter().zip(&slopes) {
-        let n_k = g.flank.nodes[k].1;
-        let (u_k, du_k) = g.node_displacement(&pose.stencil, k, pose.eta);
+        let n_k = grid.nodes[k].1;
+        let (u_k, du_k) = g.node_displacement(flank, &pose.stencil, k, pose.eta);
         for c in 0..3 {
             m[c] += w * n_k[c];
             dm[c] += dw * n_k[c];
@@ -105,42 +140,57 @@ fn elastic_approach(
     })
 }
 
-/// The penetration and the transverse effective radius of curvature of pair j, section s, at
-/// perturbed poses (the tip corners' central differences).
+/// The penetration and the transverse effective radius of curvature of pair j on `flank`,
+/// search section s, at perturbed poses (the tip corners' central differences).
 fn penetration_at(
     model: &PmorModel,
     place: &PairPlacement,
+    flank: Flank,
     poses: [&GearPose; 2],
     j: i64,
     section: usize,
     z_mid: f64,
 ) -> Result<Option<(f64, f64)>, String> {
-    let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, section, z_mid) else { return Ok(None) };
-    let mut alpha = c.rigid_penetration_m;
+    let sections = model.gears[0].flank(flank).grid.layer_z_m.len() - 1;
+    let Some(at) = locate(place, flank, [poses[0].theta, poses[1].theta], j, section, z_mid, sections) else {
+        return Ok(None);
+    };
+    let mut alpha = at.c.rigid_penetration_m;
     for i in 0..2 {
-        alpha += elastic_approach(model, i, poses[i], &c)?.value_m;
+        alpha += elastic_approach(model, i, flank, poses[i], &at)?.value_m;
     }
-    Ok(Some((alpha, transverse_radius(&c))))
+    Ok(Some((alpha, transverse_radius(&at.c))))
 }
 
 fn transverse_radius(c: &SectionContact) -> f64 {
     c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1])
 }
 
-/// ∂α/∂θᵢ and ∂R/∂θᵢ (R transverse) of a conjugate contact at fixed η, in closed form.
-fn conjugate_slopes(model: &PmorModel, c: &SectionContact, e: &[ElasticApproach; 2]) -> ([f64; 2], [f64; 2]) {
+/// ∂α/∂θᵢ and ∂R/∂θᵢ (R transverse) of a conjugate contact at fixed η, in closed form. The
+/// search pose turns as ±θ (`Flank::sign`: the half turn reverses the angles): the rigid
+/// approach and the point's travel along the flanks follow it, the shapes' turning (∂/∂ϑ at
+/// fixed point) follows the gear itself.
+fn conjugate_slopes(
+    model: &PmorModel,
+    flank: Flank,
+    c: &SectionContact,
+    e: &[ElasticApproach; 2],
+) -> ([f64; 2], [f64; 2]) {
     let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
-    // u from T₁ and v = L − u from T₂ along the line of action; du/dθ₂ = r_b2.
+    let sign = flank.sign();
+    // u from T₁ and v = L − u from T₂ along the line of action; du/dθ₂ = r_b2 in the search pose.
     let [u, v] = c.curvature_radius_m;
     let radius_slope = [u * rb[1] / c.radius_m[0], -v * rb[1] / c.radius_m[1]];
     let alpha = [
-        c.arm_ratio * rb[0] + e[0].per_angle_m,
-        -c.arm_ratio * rb[1] + e[1].per_angle_m + e[0].per_radius * radius_slope[0] + e[1].per_radius * radius_slope[1],
+        sign * c.arm_ratio * rb[0] + e[0].per_angle_m,
+        sign * (-c.arm_ratio * rb[1] + e[0].per_radius * radius_slope[0] + e[1].per_radius * radius_slope[1])
+            + e[1].per_angle_m,
     ];
-    (alpha, [0.0, rb[1] * (v - u) / (u + v)])
+    (alpha, [0.0, sign * rb[1] * (v - u) / (u + v)])
 }
 
-/// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂.
+/// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂ (of the pose
+/// searched).
 pub fn candidate_pairs(model: &PmorModel, theta2: f64) -> std::ops::RangeInclusive<i64> {
     let p = &model.pair;
     let pb = p.base_pitch_m;
@@ -161,7 +211,8 @@ pub enum Loading {
     Point,
 }
 
-/// Contact loads of the pair; `restage` maps a gear's angle to its stencil (for the differences).
+/// Contact loads of the pair on both flanks; `restage` maps a gear's angle to its stencil (for
+/// the differences).
 pub fn contact_loads(
     model: &PmorModel,
     place: &PairPlacement,
@@ -170,95 +221,106 @@ pub fn contact_loads(
     loading: Loading,
 ) -> Result<ContactLoads, String> {
     let p = &model.pair;
-    let te = p.gear1.base_radius_m * poses[0].theta - p.gear2.base_radius_m * poses[1].theta;
-    if te < -p.backlash_loa_m {
-        return Err(format!(
-            "the coast flanks touch (transmission error {te:.3e} m beyond the backlash {:.3e} m): back-flank contact is not in the PMOR-Hertz model yet",
-            p.backlash_loa_m
-        ));
-    }
     let n_e = [poses[0].eta.len(), poses[1].eta.len()];
     let mut out = ContactLoads { force: [vec![0.0; 1 + n_e[0]], vec![0.0; 1 + n_e[1]]], ..Default::default() };
-    let layers = &model.gears[0].flank.layer_z_m;
+    let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
+    let sections = layers.len() - 1;
     let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
     let info = &model.info;
+    let theta = [poses[0].theta, poses[1].theta];
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
-    for j in candidate_pairs(model, poses[1].theta) {
-        let mut pair_force = 0.0;
-        for s in 0..layers.len() - 1 {
-            let z_mid = 0.5 * (layers[s] + layers[s + 1]);
-            let Some(c) = place.section_contact([poses[0].theta, poses[1].theta], j, s, z_mid) else { continue };
-            let e = [elastic_approach(model, 0, poses[0], &c)?, elastic_approach(model, 1, poses[1], &c)?];
-            let alpha = c.rigid_penetration_m + e[0].value_m + e[1].value_m;
-            if alpha <= 0.0 {
-                continue;
-            }
-            let law = c.line_contact(p, layers[s + 1] - layers[s], info.depth_m, info.law);
-            let force = law.force(alpha)?;
-            if force <= 0.0 {
-                continue;
-            }
-            law.check_half_width(force).map_err(|m| format!("tooth pair {j}, section {s}: {m}"))?;
-            // Generalized forces on η: the Hertz band, pushing into each tooth.
-            let beta = law.half_width(force);
-            for i in 0..2 {
-                let g = &model.gears[i];
-                let (band, normal) = match loading {
-                    Loading::HertzBand => (
-                        g.flank
-                            .band_shares(e[i].tooth, c.radius_m[i], beta, base[i], s)
-                            .ok_or("band outside the stored flank")?,
-                        None,
-                    ),
-                    Loading::Point => (e[i].shares.clone(), Some(e[i].normal)),
-                };
-                for &(k, w) in &band {
-                    g.basis_row(&poses[i].stencil, k, normal.unwrap_or(g.flank.nodes[k].1), &mut tmp[i]);
-                    for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
-                        *f -= force * w * t;
+    for flank in Flank::BOTH {
+        let searched = match flank {
+            Flank::Drive => theta,
+            Flank::Coast => place.half_turn_angles(theta),
+        };
+        let reach: f64 =
+            (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();
+        for j in candidate_pairs(model, searched[1]) {
+            let mut pair_force = 0.0;
+            for s in 0..sections {
+                let z_mid = 0.5 * (layers[s] + layers[s + 1]);
+                let Some(at) = locate(place, flank, theta, j, s, z_mid, sections) else { continue };
+                let c = &at.c;
+                if c.rigid_penetration_m + reach <= 0.0 {
+                    continue; // a gap the deformation cannot close (most of the coast flanks)
+                }
+                let e = [
+                    elastic_approach(model, 0, flank, poses[0], &at)?,
+                    elastic_approach(model, 1, flank, poses[1], &at)?,
+                ];
+                let alpha = c.rigid_penetration_m + e[0].value_m + e[1].value_m;
+                if alpha <= 0.0 {
+                    continue;
+                }
+                let law = c.line_contact(p, layers[s + 1] - layers[s], info.depth_m, info.law);
+                let force = law.force(alpha)?;
+                if force <= 0.0 {
+                    continue;
+                }
+                law.check_half_width(force)
+                    .map_err(|m| format!("tooth pair {j}, section {}, {flank:?} flanks: {m}", at.section))?;
+                // Generalized forces on η: the Hertz band, pushing into each tooth.
+                let beta = law.half_width(force);
+                for i in 0..2 {
+                    let g = &model.gears[i];
+                    let grid = &g.flank(flank).grid;
+                    let (band, normal) = match loading {
+                        Loading::HertzBand => (
+                            grid.band_shares(e[i].tooth, c.radius_m[i], beta, base[i], at.section)
+                                .ok_or("band outside the stored flank")?,
+                            None,
+                        ),
+                        Loading::Point => (e[i].shares.clone(), Some(e[i].normal)),
+                    };
+                    for &(k, w) in &band {
+                        g.basis_row(flank, &poses[i].stencil, k, normal.unwrap_or(grid.nodes[k].1), &mut tmp[i]);
+                        for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
+                            *f -= force * w * t;
+                        }
                     }
                 }
-            }
-            // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
-            // along the penetration's change, plus the potential's change with the radii of
-            // curvature as the contact point travels (the law's geometry).
-            // ∂W/∂R for the transverse R (the law's R is R/cos β_b).
-            let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius(&c);
-            let (alpha_slope, radius_slope) = match c.kind {
-                ContactKind::Conjugate => conjugate_slopes(model, &c, &e),
-                ContactKind::TipOfGear1 | ContactKind::TipOfGear2 => {
-                    let mut slopes = ([0.0; 2], [0.0; 2]);
-                    for i in 0..2 {
-                        let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
-                            let theta = poses[i].theta + sign * ANGLE_STEP;
-                            let pose = GearPose {
-                                theta,
-                                anchor: poses[i].anchor,
-                                stencil: restage(i, theta)?,
-                                eta: poses[i].eta,
+                // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
+                // along the penetration's change, plus the potential's change with the radii of
+                // curvature as the contact point travels (the law's geometry).
+                // ∂W/∂R for the transverse R (the law's R is R/cos β_b).
+                let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius(c);
+                let (alpha_slope, radius_slope) = match c.kind {
+                    ContactKind::Conjugate => conjugate_slopes(model, flank, c, &e),
+                    ContactKind::TipOfGear1 | ContactKind::TipOfGear2 => {
+                        let mut slopes = ([0.0; 2], [0.0; 2]);
+                        for i in 0..2 {
+                            let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
+                                let theta = poses[i].theta + sign * ANGLE_STEP;
+                                let pose = GearPose {
+                                    theta,
+                                    anchor: poses[i].anchor,
+                                    stencil: restage(i, theta)?,
+                                    eta: poses[i].eta,
+                                };
+                                let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
+                                penetration_at(model, place, flank, both, j, s, z_mid)
                             };
-                            let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
-                            penetration_at(model, place, both, j, s, z_mid)
-                        };
-                        // A difference that leaves the corner's reach contributes nothing.
-                        let (Some(up), Some(down)) = (shifted(1.0)?, shifted(-1.0)?) else { continue };
-                        slopes.0[i] = (up.0 - down.0) / (2.0 * ANGLE_STEP);
-                        slopes.1[i] = (up.1 - down.1) / (2.0 * ANGLE_STEP);
+                            // A difference that leaves the corner's reach contributes nothing.
+                            let (Some(up), Some(down)) = (shifted(1.0)?, shifted(-1.0)?) else { continue };
+                            slopes.0[i] = (up.0 - down.0) / (2.0 * ANGLE_STEP);
+                            slopes.1[i] = (up.1 - down.1) / (2.0 * ANGLE_STEP);
+                        }
+                        slopes
                     }
-                    slopes
+                };
+                for i in 0..2 {
+                    out.force[i][0] -= force * alpha_slope[i] + dw_dr * radius_slope[i];
                 }
-            };
-            for i in 0..2 {
-                out.force[i][0] -= force * alpha_slope[i] + dw_dr * radius_slope[i];
+                out.normal_force_n += flank.sign() * force;
+                out.potential_j += force * alpha - law.complementary_energy(force);
+                out.tangent_stiffness_n_per_m += 1.0 / law.compliance(force);
+                pair_force += force;
             }
-            out.normal_force_n += force;
-            out.potential_j += force * alpha - law.complementary_energy(force);
-            out.tangent_stiffness_n_per_m += 1.0 / law.compliance(force);
-            pair_force += force;
-        }
-        if pair_force > 0.0 {
-            out.pairs_in_contact += 1;
-            out.pair_forces.push((j, pair_force));
+            if pair_force > 0.0 {
+                out.pairs_in_contact += 1;
+                out.pair_forces.push((j, flank.sign() * pair_force));
+            }
         }
     }
     Ok(out)

@@ -13,6 +13,7 @@
 
 use super::interpolation::Weights;
 use super::model::{Interpolation, PmorGear};
+use crate::contact::mesh_kinematics::Flank;
 use nalgebra::{DMatrix, DVector};
 
 /// Where on the stored samples a reference angle ϑ falls.
@@ -38,21 +39,22 @@ impl PmorGear {
         Ok(Stencil { a0: (s as i64 + 1) as usize, weights: interpolation.weights(p), step })
     }
 
-    /// The displacement u = Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ of flank node k (gear frame) and its
-    /// derivative ∂u/∂ϑ at fixed η (the shapes' interpolation turning with the gear).
-    pub fn node_displacement(&self, st: &Stencil, node: usize, eta: &[f64]) -> ([f64; 3], [f64; 3]) {
+    /// The displacement u = Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ of node k of `flank` (gear frame) and
+    /// its derivative ∂u/∂ϑ at fixed η (the shapes' interpolation turning with the gear).
+    pub fn node_displacement(&self, flank: Flank, st: &Stencil, node: usize, eta: &[f64]) -> ([f64; 3], [f64; 3]) {
+        let rows = self.flank(flank);
         let n_k = self.modes();
         let (eta_phi, eta_psi) = eta.split_at(n_k);
         let (mut u, mut du) = ([0.0; 3], [0.0; 3]);
         for c in 0..3 {
             let r = 3 * node + c;
-            u[c] = (0..n_k).map(|j| self.flank_phi[(r, j)] * eta_phi[j]).sum();
+            u[c] = (0..n_k).map(|j| rows.phi[(r, j)] * eta_phi[j]).sum();
             for a in 0..4 {
                 let (w, dw) = (st.weights.w[a], st.weights.dw[a] / st.step);
                 if w == 0.0 && dw == 0.0 {
                     continue;
                 }
-                let s = &self.flank_shapes[st.a0 + a];
+                let s = &rows.shapes[st.a0 + a];
                 let v: f64 = (0..self.shapes).map(|t| s[(r, t)] * eta_psi[t]).sum();
                 u[c] += w * v;
                 du[c] += dw * v;
@@ -61,18 +63,31 @@ impl PmorGear {
         (u, du)
     }
 
-    /// Row of the basis V = [Φ, Ψ] for a direction at a flank node: dirᵀ·[Φ_k, Σₐ wₐ S_{a,k}].
-    pub fn basis_row(&self, st: &Stencil, node: usize, dir: [f64; 3], out: &mut [f64]) {
+    /// A bound on |u| at every node of `flank`: |Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ| ≤
+    /// max‖Φ_k‖·|η_Φ| + Σₐ|wₐ|·max‖S_{a,k}‖·|η_Ψ|. The contact skips a section whose rigid gap
+    /// exceeds the two gears' bounds: it cannot close, so nothing is lost by not reading it.
+    pub fn flank_displacement_bound(&self, flank: Flank, st: &Stencil, eta: &[f64]) -> f64 {
+        let [phi, shapes] = self.flank(flank).largest_node_rows;
+        let (eta_phi, eta_psi) = eta.split_at(self.modes());
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let weights: f64 = st.weights.w.iter().map(|w| w.abs()).sum();
+        phi * norm(eta_phi) + weights * shapes * norm(eta_psi)
+    }
+
+    /// Row of the basis V = [Φ, Ψ] for a direction at node k of `flank`:
+    /// dirᵀ·[Φ_k, Σₐ wₐ S_{a,k}].
+    pub fn basis_row(&self, flank: Flank, st: &Stencil, node: usize, dir: [f64; 3], out: &mut [f64]) {
+        let rows = self.flank(flank);
         let n_k = self.modes();
         for (j, o) in out[..n_k].iter_mut().enumerate() {
-            *o = (0..3).map(|c| dir[c] * self.flank_phi[(3 * node + c, j)]).sum();
+            *o = (0..3).map(|c| dir[c] * rows.phi[(3 * node + c, j)]).sum();
         }
         for t in 0..self.shapes {
             let mut v = 0.0;
             for a in 0..4 {
                 let w = st.weights.w[a];
                 if w != 0.0 {
-                    let s = &self.flank_shapes[st.a0 + a];
+                    let s = &rows.shapes[st.a0 + a];
                     v += w * (0..3).map(|c| dir[c] * s[(3 * node + c, t)]).sum::<f64>();
                 }
             }

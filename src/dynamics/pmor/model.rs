@@ -4,8 +4,8 @@
 //!
 //! Per gear, in its floating frame (design §4.5): u = V(ϑ)η with V = [Φ, Ψ(ϑ)], Φ the n_k lowest
 //! fixed-bore eigenmodes (mass-normalized), Ψ(ϑ) = Σₐ wₐ(ϑ)·S_a the interpolated global contact
-//! shapes (n_t columns per angular sample, one per torque level, residual against Φ and of unit
-//! modal mass each).
+//! shapes (n_t columns per angular sample, one per torque level and loaded flank, drive and
+//! coast, residual against Φ and of unit modal mass each).
 //! ϑ is the gear's angle within its reference pitch; the samples are ϑ_s = s·Δϑ and one pitch on
 //! a shape is the one-tooth rotation of the first (S_{s+n_θ} = P·S_s), stored explicitly for
 //! s = −2 … n_θ + 2 so that every interpolation interval in [−Δϑ, pitch + Δϑ) has its four
@@ -14,6 +14,7 @@
 //! gear's polar moment of inertia.
 
 use crate::contact::hertz::ApproachLaw;
+use crate::contact::mesh_kinematics::Flank;
 use crate::gear::GearPair;
 use crate::rom::flank::FlankGrid;
 use nalgebra::{DMatrix, DVector};
@@ -61,7 +62,8 @@ pub struct PmorGear {
     pub samples: usize,
     /// Eigenvalues ω² of Φ (rad²/s²), ascending.
     pub eigenvalues: Vec<f64>,
-    /// Shapes per sample n_t (one per torque level).
+    /// Shapes per sample n_t: one per torque level loading the drive flanks, then one per torque
+    /// level loading the coast flanks (`rom::dynamic_reductor`).
     pub shapes: usize,
     /// R = ΦᵀM P⁻¹Φ: the coordinates of Φ one pitch back in Φ (orthogonal when span Φ is
     /// invariant under the tooth rotation). When ϑ passes a pitch, η_Φ ← R·η_Φ.
@@ -79,12 +81,31 @@ pub struct PmorGear {
     pub sample: Vec<SampleInvariants>,
     /// Per stored sample a and offset d = b − a + 3 ∈ 0…6 (None where b is out of range).
     pub pair: Vec<Option<PairInvariants>>,
-    /// The loadable flank nodes of the teeth that can mesh (reference pitch).
-    pub flank: FlankGrid,
-    /// Rows of Φ at the flank nodes (3 per node: x, y, z), n_k columns.
-    pub flank_phi: DMatrix<f64>,
-    /// Rows of each stored sample S_a at the flank nodes, n_t columns.
-    pub flank_shapes: Vec<DMatrix<f64>>,
+    /// The loadable nodes of the drive and the coast flanks (`Flank::Drive as usize`, …) of the
+    /// teeth that can mesh (reference pitch), with the rows of Φ and of the shapes there.
+    pub flanks: [FlankRows; 2],
+}
+
+/// One flank's loadable nodes and the basis rows there: all the contact reads of the FE fields.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlankRows {
+    pub grid: FlankGrid,
+    /// Rows of Φ at the nodes (3 per node: x, y, z), n_k columns.
+    pub phi: DMatrix<f64>,
+    /// Rows of each stored sample S_a at the nodes, n_t columns.
+    pub shapes: Vec<DMatrix<f64>>,
+    /// The largest Frobenius norm of a node's 3 rows of Φ, and of a stored sample's: they bound
+    /// every node's displacement by the size of η ([`PmorGear::flank_displacement_bound`]).
+    pub largest_node_rows: [f64; 2],
+}
+
+impl FlankRows {
+    pub fn new(grid: FlankGrid, phi: DMatrix<f64>, shapes: Vec<DMatrix<f64>>) -> Self {
+        let node_norm = |m: &DMatrix<f64>, k: usize| m.rows(3 * k, 3).norm();
+        let largest = |m: &DMatrix<f64>| (0..grid.len()).map(|k| node_norm(m, k)).fold(0.0, f64::max);
+        let largest_node_rows = [largest(&phi), shapes.iter().map(largest).fold(0.0, f64::max)];
+        FlankRows { grid, phi, shapes, largest_node_rows }
+    }
 }
 
 impl PmorGear {
@@ -103,6 +124,10 @@ impl PmorGear {
 
     pub fn sample_step_rad(&self) -> f64 {
         self.pitch_rad() / self.samples as f64
+    }
+
+    pub fn flank(&self, flank: Flank) -> &FlankRows {
+        &self.flanks[flank as usize]
     }
 
     pub fn pair_invariants(&self, a: usize, b: usize) -> &PairInvariants {
