@@ -236,6 +236,9 @@ pub fn contact_loads(
         };
         let reach: f64 =
             (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();
+        if !place.flank_can_close(flank, theta, reach) {
+            continue; // backed off beyond the deformation's reach (the coast flanks, mostly)
+        }
         for j in candidate_pairs(model, searched[1]) {
             let mut pair_force = 0.0;
             for s in 0..sections {
