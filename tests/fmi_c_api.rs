@@ -1092,3 +1092,43 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     );
     fmi2FreeInstance(c);
 }
+
+/// Issue 13, item 2, for the PMOR-Hertz FMU: the stability check at ExitInitializationMode
+/// follows the instance's own parameters. A raised mesh damping ratio (90 % on the shapes
+/// instead of the build's 5 %) puts eigenvalues near the negative real axis whose RK4 limit lies
+/// below the default max_step (measured with `linear::rk4_limit_under_load` at 4 × the ROM
+/// torque: 5.4 µs at 5 %, 3.5 µs at 50 %, 1.5 µs at 99 %; the default step is 3.2 µs):
+/// ExitInitializationMode refuses it with the limit in the log line (linearized again with the
+/// instance's damping), and accepts it with max_step below that limit, where the pair then
+/// steps under load. The build's own parameters keep the stored limit.
+#[test]
+fn pmor_hertz_raised_damping_is_checked_against_its_own_step_limit() {
+    let (dir, guid) = pmor_resources();
+    let setup = |name: &str, max_step: Option<f64>| -> (fmi2Component, fmi2Status) {
+        let c = instantiate_at(name, dir, guid);
+        assert!(!c.is_null(), "{:?}", logs(name));
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+        assert_eq!(fmi2EnterInitializationMode(c), OK);
+        assert_eq!(set(c, "mesh_damping_ratio", 0.9), OK);
+        if let Some(h) = max_step {
+            assert_eq!(set(c, "max_step", h), OK);
+        }
+        (c, fmi2ExitInitializationMode(c))
+    };
+    let (c, status) = setup("pmor-damped", None);
+    assert_eq!(status, ERR, "the default step with 90 % shape damping must be refused");
+    assert_logged("pmor-damped", "exceeds RK4's stability limit");
+    assert_logged("pmor-damped", "mesh damping ratio 0.9");
+    fmi2FreeInstance(c);
+    // The limit from the log line; the instance accepts a step below it.
+    let line = logs("pmor-damped").into_iter().find(|l| l.contains("exceeds RK4's stability limit")).unwrap();
+    let limit: f64 = line.split("stability limit ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let (c, status) = setup("pmor-damped-small-step", Some(0.9 * limit));
+    assert_eq!(status, OK, "{:?}", logs("pmor-damped-small-step"));
+    assert_eq!(set(c, "tau_1", 185.0), OK);
+    for k in 0..20 {
+        assert_eq!(fmi2DoStep(c, k as f64 * 1e-4, 1e-4, 1), OK, "{:?}", logs("pmor-damped-small-step").last());
+    }
+    fmi2FreeInstance(c);
+    println!("PMOR-Hertz RK4 limit with 90 % shape damping: {:.3} µs", limit * 1e6);
+}

@@ -122,6 +122,9 @@ pub struct GearPairFmu {
     pub physics: Physics,
     /// (value reference, variable), from variables.toml.
     lookup: Vec<(u32, Var)>,
+    /// PMOR-Hertz: RK4's stability limit (s) for parameters other than the build's (inertias,
+    /// mesh damping ratio, as bits), linearized once per set (`check_stability`).
+    stability_limits: std::sync::Mutex<Vec<([u64; 3], f64)>>,
 }
 
 /// The lumped model's (s).
@@ -147,7 +150,7 @@ impl GearPairFmu {
                 .ok_or_else(|| format!("interface variable {} has no physics in this binary", v.name))?;
             lookup.push((v.value_reference, var));
         }
-        Ok(GearPairFmu { physics, lookup })
+        Ok(GearPairFmu { physics, lookup, stability_limits: Default::default() })
     }
 
     fn var(&self, vr: u32) -> Result<Var, String> {
@@ -207,7 +210,9 @@ impl GearPairFmu {
             Physics::Lumped(mesh) => {
                 (crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params), "the stiffest mesh mode")
             }
-            Physics::PmorHertz { model, .. } => (model.rk4_limit_s, "the pair linearized at 4 × its ROM torque"),
+            Physics::PmorHertz { model, place } => {
+                (self.pmor_rk4_limit(model, place, s)?, "the pair linearized at 4 × its ROM torque")
+            }
         };
         if s.max_step_s <= limit {
             Ok(())
@@ -217,6 +222,29 @@ impl GearPairFmu {
                 s.max_step_s, s.params.inertia_1_kgm2, s.params.inertia_2_kgm2, s.params.mesh_damping_ratio
             ))
         }
+    }
+
+    /// RK4's stability limit of the PMOR-Hertz pair with an instance's parameters: the build's
+    /// (stored in the model file) when they are the build's own, else the same linearization
+    /// with the instance's inertias and shape damping (about 0.3 s, once per parameter set):
+    /// a raised damping ratio puts real eigenvalues beyond the default step's reach.
+    fn pmor_rk4_limit(&self, model: &PmorModel, place: &PairPlacement, s: &GearPairState) -> Result<f64, String> {
+        let p = &s.params;
+        let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+        if p.mesh_damping_ratio == model.shape_damping_ratio && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
+            return Ok(model.rk4_limit_s);
+        }
+        let key = [p.inertia_1_kgm2.to_bits(), p.inertia_2_kgm2.to_bits(), p.mesh_damping_ratio.to_bits()];
+        let mut cache = self.stability_limits.lock().map_err(|_| "the stability cache is poisoned".to_string())?;
+        if let Some(&(_, limit)) = cache.iter().find(|(k, _)| *k == key) {
+            return Ok(limit);
+        }
+        let torque = crate::rom::dynamic_reductor::STEP_LOAD_FACTOR
+            * model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+        let (limit, _) = crate::dynamics::pmor::linear::rk4_limit_under_load(&self.pmor(model, place, s), torque)
+            .map_err(|e| format!("RK4's stability limit with these parameters could not be found: {e}"))?;
+        cache.push((key, limit));
+        Ok(limit)
     }
 
     /// An inertia parameter: positive; for the PMOR-Hertz model not below the FE gear's own

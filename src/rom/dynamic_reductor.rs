@@ -102,15 +102,15 @@ pub struct IntegratorStep {
 /// The linearization's load as a multiple of the largest ROM torque: the stiffest mode is the
 /// Hertz contact's, which stiffens (slowly, logarithmically) with load; at 4× the limit is 11 %
 /// shorter than at the ROM load on the default spur pair.
-const STEP_LOAD_FACTOR: f64 = 4.0;
+pub const STEP_LOAD_FACTOR: f64 = 4.0;
 /// Fraction of the stability limit taken as the default step: room for the transient loads of
 /// impacts and re-engagement and for a user's larger damping ratios. On example 3 the DTE at
 /// 1 µs and at 6 µs agree within 0.2 % (BENCHMARKS), so the step is set by stability, not accuracy.
 const STEP_SAFETY: f64 = 0.6;
 
-/// The default RK4 step of a reduced pair: linearize at the static equilibrium under
-/// `STEP_LOAD_FACTOR` × the largest ROM torque, at four angles over gear 2's pitch (single and
-/// double contact), and take the shortest limit.
+/// The default RK4 step of a reduced pair: RK4's stability limit on the pair linearized under
+/// `STEP_LOAD_FACTOR` × the largest ROM torque with the default damping
+/// (`linear::rk4_limit_under_load`), and `STEP_SAFETY` of it.
 fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<IntegratorStep, String> {
     use crate::contact::mesh_kinematics::PairPlacement;
     use crate::dynamics::pmor::{linear, PmorDynamics};
@@ -122,21 +122,7 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
         [0.0; 2],
     );
     let torque = STEP_LOAD_FACTOR * options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    // Start at a tenth of the STE a mesh stiffness of 10 N/(mm·µm) would give: with η = 0 the
-    // whole approach sits in the Hertz contact, so the Newton iterates come from the light side
-    // and stay inside the contact law's range (b ≤ h/4).
-    let guess = torque / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
-    let mut shortest: Option<(f64, Vec<f64>)> = None;
-    for quarter in 0..4 {
-        let theta2 = (quarter as f64 + 0.5) / 4.0 * model.gears[1].pitch_rad();
-        let (state, torque2) = linear::static_equilibrium(&dynamics, theta2, torque, guess)?;
-        let lin = linear::linearize(&dynamics, &state, [torque, torque2])?;
-        let limit = lin.rk4_stability_limit_s();
-        if shortest.as_ref().map_or(true, |s| limit < s.0) {
-            shortest = Some((limit, lin.natural_frequencies_hz()));
-        }
-    }
-    let (rk4_limit_s, natural_frequencies_hz) = shortest.expect("four angles");
+    let (rk4_limit_s, natural_frequencies_hz) = linear::rk4_limit_under_load(&dynamics, torque)?;
     let max_step_s = (STEP_SAFETY * rk4_limit_s * 1e7).floor() / 1e7;
     Ok(IntegratorStep { torque_nm: torque, natural_frequencies_hz, rk4_limit_s, max_step_s })
 }
