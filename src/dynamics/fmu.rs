@@ -239,7 +239,7 @@ impl GearPairFmu {
         if let Some(&(_, limit)) = cache.iter().find(|(k, _)| *k == key) {
             return Ok(limit);
         }
-        let torque = crate::rom::dynamic_reductor::STEP_LOAD_FACTOR
+        let torque = crate::dynamics::pmor::linear::STEP_LOAD_FACTOR
             * model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
         let (limit, _) = crate::dynamics::pmor::linear::rk4_limit_under_load(&self.pmor(model, place, s), torque)
             .map_err(|e| format!("RK4's stability limit with these parameters could not be found: {e}"))?;

@@ -99,17 +99,13 @@ pub struct IntegratorStep {
     pub max_step_s: f64,
 }
 
-/// The linearization's load as a multiple of the largest ROM torque: the stiffest mode is the
-/// Hertz contact's, which stiffens (slowly, logarithmically) with load; at 4× the limit is 11 %
-/// shorter than at the ROM load on the default spur pair.
-pub const STEP_LOAD_FACTOR: f64 = 4.0;
 /// Fraction of the stability limit taken as the default step: room for the transient loads of
 /// impacts and re-engagement and for a user's larger damping ratios. On example 3 the DTE at
 /// 1 µs and at 6 µs agree within 0.2 % (BENCHMARKS), so the step is set by stability, not accuracy.
 const STEP_SAFETY: f64 = 0.6;
 
 /// The default RK4 step of a reduced pair: RK4's stability limit on the pair linearized under
-/// `STEP_LOAD_FACTOR` × the largest ROM torque with the default damping
+/// `linear::STEP_LOAD_FACTOR` × the largest ROM torque with the default damping
 /// (`linear::rk4_limit_under_load`), and `STEP_SAFETY` of it.
 fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<IntegratorStep, String> {
     use crate::contact::mesh_kinematics::PairPlacement;
@@ -121,7 +117,7 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
         model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
         [0.0; 2],
     );
-    let torque = STEP_LOAD_FACTOR * options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    let torque = linear::STEP_LOAD_FACTOR * options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
     let (rk4_limit_s, natural_frequencies_hz) = linear::rk4_limit_under_load(&dynamics, torque)?;
     let max_step_s = (STEP_SAFETY * rk4_limit_s * 1e7).floor() / 1e7;
     Ok(IntegratorStep { torque_nm: torque, natural_frequencies_hz, rk4_limit_s, max_step_s })

@@ -14,6 +14,12 @@
 use super::{PmorDynamics, PmorState};
 use nalgebra::{Complex, DMatrix, DVector};
 
+/// The load of the step-limit linearization as a multiple of the largest ROM torque
+/// (`rk4_limit_under_load`): the stiffest mode is the Hertz contact's, which stiffens (slowly,
+/// logarithmically) with load; at 4× the limit is 11 % shorter than at the ROM load on the
+/// default spur pair.
+pub const STEP_LOAD_FACTOR: f64 = 4.0;
+
 /// Relative size of the differences (of the coordinate's scale, below).
 const DIFFERENCE: f64 = 1e-6;
 
