@@ -326,8 +326,14 @@ impl PairPlacement {
                 best = Some(c);
             }
         };
+        // Gear 2's flank crosses the LOA at u; gear 1's crosses it a transverse TE further on,
+        // at u₁ = u + TE (an overlap when TE > 0). Each gear's own crossing decides whether its
+        // flank reaches the line and gives its radius and radius of curvature: with u for both,
+        // conjugate contact outlived gear 1's tip by TE and handed over to the tip corner a
+        // distance ≈ TE²/2ρ away (a jump of the contact potential the energy test saw).
+        let u1 = u + g1.base_radius_m * theta[0] - g2.base_radius_m * theta[1];
         // Conjugate contact on the LOA, inside the path of contact.
-        if (p.path_start_m..=p.path_end_m).contains(&u) {
+        if u >= p.path_start_m && u1 <= p.path_end_m && u <= loa {
             let r2 = g2.base_radius_m.hypot(loa - u);
             let w = self.to_world(1, theta[1], self.flank_point(1, j, r2, z));
             let own1 = self.to_own(0, theta[0], w);
@@ -337,10 +343,10 @@ impl PairPlacement {
                 z_m: z,
                 kind: ContactKind::Conjugate,
                 teeth,
-                radius_m: [g1.base_radius_m.hypot(u), r2],
+                radius_m: [g1.base_radius_m.hypot(u1), r2],
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, own1),
                 arm_ratio: cos_bb,
-                curvature_radius_m: [u, loa - u],
+                curvature_radius_m: [u1, loa - u],
             });
         }
         // Gear 2's tip corner on gear 1's flank (the flank normal is tangent to base circle 1,
@@ -365,7 +371,7 @@ impl PairPlacement {
         let w1 = self.to_world(0, theta[0], self.flank_point(0, j, g1.tip_radius_m, z));
         let tip1 = self.to_own(1, theta[1], w1);
         let r = tip1[0].hypot(tip1[1]);
-        if (form[1]..=g2.tip_radius_m).contains(&r) && (u > p.path_end_m) {
+        if (form[1]..=g2.tip_radius_m).contains(&r) && (u1 > p.path_end_m) {
             consider(SectionContact {
                 pair: j,
                 section,
@@ -375,7 +381,7 @@ impl PairPlacement {
                 radius_m: [g1.tip_radius_m, r],
                 rigid_penetration_m: -cos_bb * self.distance_from_flank(1, j, z, tip1),
                 arm_ratio: cos_bb * self.arm_on_gear1_of_gear2_normal(w1, theta[1], j, z) / g1.base_radius_m,
-                curvature_radius_m: [corner_radius(g1, u - p.path_end_m), (r * r - g2.base_radius_m.powi(2)).sqrt()],
+                curvature_radius_m: [corner_radius(g1, u1 - p.path_end_m), (r * r - g2.base_radius_m.powi(2)).sqrt()],
             });
         }
         best
@@ -480,9 +486,11 @@ mod tests {
                         if let Some(c) = place.section_contact([theta1, theta2], j, 0, z) {
                             if c.kind == ContactKind::Conjugate {
                                 assert!((c.rigid_penetration_m - cos_bb * te).abs() < 1e-10, "{file} j {j}");
+                                // Gear 1's own crossing of the LOA is TE beyond gear 2's.
                                 let (r1, r2) = (c.radius_m[0], c.radius_m[1]);
-                                let u = (r1 * r1 - rb1 * rb1).sqrt();
+                                let u = (r1 * r1 - rb1 * rb1).sqrt() - te;
                                 assert!((u + (r2 * r2 - rb2 * rb2).sqrt() - p.loa_length_m()).abs() < 1e-9);
+                                let r1 = rb1.hypot(u);
                                 let w = place.to_world(1, theta2, place.flank_point(1, j, r2, z));
                                 assert!(
                                     (w[0].hypot(w[1]) - r1).abs() < 1e-9,

@@ -166,10 +166,13 @@ fn transverse_radius(c: &SectionContact) -> f64 {
     c.curvature_radius_m[0] * c.curvature_radius_m[1] / (c.curvature_radius_m[0] + c.curvature_radius_m[1])
 }
 
-/// ∂α/∂θᵢ and ∂R/∂θᵢ (R transverse) of a conjugate contact at fixed η, in closed form. The
-/// search pose turns as ±θ (`Flank::sign`: the half turn reverses the angles): the rigid
-/// approach and the point's travel along the flanks follow it, the shapes' turning (∂/∂ϑ at
-/// fixed point) follows the gear itself.
+/// ∂α/∂θᵢ and ∂R/∂θᵢ (R transverse) of a conjugate contact at fixed η, in closed form. Each
+/// gear's contact point is its own crossing of the line of action (`section_contact`): gear 1's
+/// at u₁ from T₁ follows θ₁ alone (du₁/dθ₁ = r_b1), gear 2's at v = L − u from T₂ follows θ₂
+/// alone (dv/dθ₂ = −r_b2); their radii and radii of curvature (R₁ = u₁, R₂ = v) travel with
+/// them. The search pose turns as ±θ (`Flank::sign`: the half turn reverses the angles): the
+/// rigid approach and the points' travel follow it, the shapes' turning (∂/∂ϑ at a fixed point)
+/// follows the gear itself.
 fn conjugate_slopes(
     model: &PmorModel,
     flank: Flank,
@@ -178,15 +181,15 @@ fn conjugate_slopes(
 ) -> ([f64; 2], [f64; 2]) {
     let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
     let sign = flank.sign();
-    // u from T₁ and v = L − u from T₂ along the line of action; du/dθ₂ = r_b2 in the search pose.
-    let [u, v] = c.curvature_radius_m;
-    let radius_slope = [u * rb[1] / c.radius_m[0], -v * rb[1] / c.radius_m[1]];
+    let [u1, v] = c.curvature_radius_m;
+    let radius_slope = [u1 * rb[0] / c.radius_m[0], -v * rb[1] / c.radius_m[1]];
     let alpha = [
-        sign * c.arm_ratio * rb[0] + e[0].per_angle_m,
-        sign * (-c.arm_ratio * rb[1] + e[0].per_radius * radius_slope[0] + e[1].per_radius * radius_slope[1])
-            + e[1].per_angle_m,
+        sign * (c.arm_ratio * rb[0] + e[0].per_radius * radius_slope[0]) + e[0].per_angle_m,
+        sign * (-c.arm_ratio * rb[1] + e[1].per_radius * radius_slope[1]) + e[1].per_angle_m,
     ];
-    (alpha, [0.0, sign * rb[1] * (v - u) / (u + v)])
+    // R = u₁v/(u₁ + v): ∂R/∂u₁ = v²/(u₁ + v)², ∂R/∂v = u₁²/(u₁ + v)².
+    let sum2 = (u1 + v).powi(2);
+    (alpha, [sign * rb[0] * v * v / sum2, -sign * rb[1] * u1 * u1 / sum2])
 }
 
 /// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂ (of the pose
