@@ -65,6 +65,13 @@ class PairFacts:
     base_radius_1_m: float
     base_radius_2_m: float
     start_values: dict = field(default_factory=dict)   # parameter start values (inertias, damping, …)
+    description: str = ""                               # the modelDescription's, which names the model kind
+
+    @property
+    def mesh_stiffness_is_whole_mesh(self) -> bool:
+        """The lumped model's ``mesh_stiffness`` is the whole mesh's tangent stiffness; PMOR-Hertz's is
+        only its Hertz contacts' (the teeth's bending lives in the elastic coordinates, README)."""
+        return "lumped model" in self.description
 
     @property
     def ratio(self) -> float:
@@ -151,14 +158,18 @@ class GearPairRunner:
         self.pair = self._probe_pair(model.description, start_values)
 
     def _probe_pair(self, description: str, start_values: dict) -> PairFacts:
-        """Teeth from the description; r_b2 = dte/dte_angle (the outputs' definition) at a turned start."""
+        """Teeth from the description; r_b2 = dte/dte_angle (the outputs' definition) at a turned start.
+
+        Gear 1 is turned back (into the backlash, no tooth touching), not forward: forward would press
+        the flanks together by r_b1·φ without deformation, which PMOR-Hertz refuses as beyond Hertz.
+        """
         z1, z2 = teeth_from_description(description)
-        self._initialize({"phi_1_start": 1e-3})
+        self._initialize({"phi_1_start": -1e-4})
         dte, dte_angle = self.fmu.getReal([self.vr["dte"], self.vr["dte_angle"]])
         self.fmu.reset()
         r_b2 = dte / dte_angle
         # Base radii of a gear pair are in the ratio of the teeth (r_b = m_t·z·cos α_t / 2).
-        return PairFacts(z1, z2, r_b2 * z1 / z2, r_b2, start_values)
+        return PairFacts(z1, z2, r_b2 * z1 / z2, r_b2, start_values, description)
 
     def _initialize(self, parameters: dict) -> None:
         self.fmu.setupExperiment(startTime=0.0)

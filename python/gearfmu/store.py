@@ -115,12 +115,21 @@ def create(path: Path, grid: Grid, pair: PairFacts, recording: Recording, fmu_na
     for name, (_, text) in REFERENCE_MEASURES.items():
         data[name] = (ref_dims, np.full(ref_shape, np.nan), {"description": text})
     data["mesh_natural_frequency_hz"] = (ref_dims, np.full(ref_shape, np.nan), {
-        "description": "linearized mesh natural frequency sqrt(k (r_b1^2/J1 + r_b2^2/J2))/(2 pi), k the reference stiffness"})
+        "description": "linearized mesh natural frequency sqrt(k (r_b1^2/J1 + r_b2^2/J2))/(2 pi); k: see the "
+                       "store's natural_frequency_stiffness"})
+    data["tangent_mesh_natural_frequency_hz"] = (ref_dims, np.full(ref_shape, np.nan), {
+        "description": "the same with k = reference_mesh_stiffness_n_per_m (mean of the mesh_stiffness output)"})
+    data["secant_mesh_natural_frequency_hz"] = (ref_dims, np.full(ref_shape, np.nan), {
+        "description": "the same with k = (T1/r_b1) / reference_dte_mean_m (static force over mean DTE)"})
     data["reference_status"] = (ref_dims, np.full(ref_shape, PENDING, np.int8), {"description": "0 pending, 1 done, 2 failed"})
     data["reference_error"] = (ref_dims, np.full(ref_shape, "", f"<U{ERROR_CHARS}"), {})
     ds = xr.Dataset(data, coords={**grid.coords(), "mesh_order": np.asarray(MESH_ORDERS)})
     ds.attrs.update({
-        "fmu_name": fmu_name, "fmu_sha256": fmu_sha256,
+        "fmu_name": fmu_name, "fmu_sha256": fmu_sha256, "fmu_description": pair.description,
+        # Small oscillations feel the tangent stiffness; the lumped FMU outputs the mesh's. PMOR-Hertz's
+        # mesh_stiffness is its Hertz contacts' alone, so there the mean DTE gives the (secant) stiffness.
+        "natural_frequency_stiffness": ("tangent: mean of the mesh_stiffness output" if pair.mesh_stiffness_is_whole_mesh
+                                        else "secant: static mesh force / mean DTE"),
         "teeth_1": pair.teeth_1, "teeth_2": pair.teeth_2,
         "base_radius_1_m": pair.base_radius_1_m, "base_radius_2_m": pair.base_radius_2_m,
         "parameter_start_values": json.dumps(pair.start_values),
@@ -169,9 +178,18 @@ class Writer:
             for name, (source, _) in REFERENCE_MEASURES.items():
                 self.group[name][index] = result[source]
             inertias = {**self.start_values, **parameters}
-            self.group["mesh_natural_frequency_hz"][index] = mesh_natural_frequency_hz(
-                result["mesh_stiffness_mean_n_per_m"], self.pair_attrs["base_radius_1_m"],
-                self.pair_attrs["base_radius_2_m"], inertias["inertia_1"], inertias["inertia_2"])
+
+            def f_n(stiffness: float) -> float:
+                return mesh_natural_frequency_hz(stiffness, self.pair_attrs["base_radius_1_m"],
+                                                 self.pair_attrs["base_radius_2_m"], inertias["inertia_1"],
+                                                 inertias["inertia_2"])
+
+            tangent = f_n(result["mesh_stiffness_mean_n_per_m"])
+            secant = f_n(result["static_mesh_force_n"] / result["dte_mean_m"])
+            self.group["tangent_mesh_natural_frequency_hz"][index] = tangent
+            self.group["secant_mesh_natural_frequency_hz"][index] = secant
+            chosen = tangent if self.pair_attrs["natural_frequency_stiffness"].startswith("tangent") else secant
+            self.group["mesh_natural_frequency_hz"][index] = chosen
             self.group["reference_error"][index] = ""
             self.group["reference_status"][index] = DONE
         else:
