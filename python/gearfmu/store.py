@@ -98,7 +98,7 @@ def create(path: Path, grid: Grid, pair: PairFacts, recording: Recording, fmu_na
     path = Path(path)
     if path.exists():
         attrs = zarr.open_group(str(path), mode="r").attrs
-        theirs = xr.open_zarr(str(path), consolidated=False)
+        theirs = xr.open_zarr(str(path), consolidated=False, chunks=None)
         same_grid = all(name in theirs.coords and np.array_equal(theirs[name].values, values)
                         for name, values in grid.coords().items()) and tuple(theirs["status"].dims) == grid.dims
         if attrs.get("fmu_sha256") != fmu_sha256 or not same_grid or attrs.get("recording") != json.dumps(recording.as_attrs()):
@@ -152,52 +152,68 @@ def pending(path: Path, retry_failed: bool = False) -> tuple[list[tuple], list[t
 
 
 class Writer:
-    """Writes results into the store, one point at a time, status last."""
+    """Writes results into the store a batch (one returned chunk) at a time, status last.
+
+    Each variable is written for the whole batch in one call (zarr's vectorized index), which
+    writes the points' chunk files concurrently; the status of the batch follows all of them.
+    """
 
     def __init__(self, path: Path):
-        self.group = zarr.open_group(str(path), mode="r+")
-        self.pair_attrs = dict(self.group.attrs)
-        self.start_values = json.loads(self.pair_attrs["parameter_start_values"])
-        self.parameter_dims = list(self.group["status"].attrs["_ARRAY_DIMENSIONS"])[2:]
+        group = zarr.open_group(str(path), mode="r+")
+        self.arrays = {name: array for name, array in group.arrays()}   # open each array once
+        self.attrs = dict(group.attrs)
+        self.start_values = json.loads(self.attrs["parameter_start_values"])
 
-    def write_point(self, index: tuple, result: dict) -> None:
-        if not result.get("error"):
-            for name in POINT_MEASURES:
-                self.group[name][index] = result[name]
-            self.group[ORDER_MEASURE][index] = result[ORDER_MEASURE]
-            self.group["error"][index] = ""
-            self.group["status"][index] = DONE
-        else:
-            self.group["wall_s"][index] = result["wall_s"]
-            self.group["error"][index] = result["error"][:ERROR_CHARS]
-            self.group["status"][index] = FAILED
+    def _set(self, name: str, indices: list[tuple], values) -> None:
+        if indices:
+            self.arrays[name].vindex[tuple(np.array(indices).T)] = np.asarray(values)
 
-    def write_reference(self, index: tuple, parameters: dict, result: dict) -> None:
-        """index: (torque, *params). The linearized f_n uses the inertias in force at the point."""
-        if not result.get("error"):
-            for name, (source, _) in REFERENCE_MEASURES.items():
-                self.group[name][index] = result[source]
+    def write_points(self, batch: list[tuple[tuple, dict]]) -> None:
+        """batch: [(grid index, result), …]."""
+        done = [(index, result) for index, result in batch if not result.get("error")]
+        failed = [(index, result) for index, result in batch if result.get("error")]
+        done_at, failed_at = [i for i, _ in done], [i for i, _ in failed]
+        for name in POINT_MEASURES:
+            self._set(name, done_at, [r[name] for _, r in done])
+        # The order amplitudes have one more axis: one coordinate per (point, order).
+        self._set(ORDER_MEASURE, [(*i, k) for i in done_at for k in range(len(MESH_ORDERS))],
+                  [a for _, r in done for a in r[ORDER_MEASURE]])
+        self._set("error", done_at, [""] * len(done))
+        self._set("wall_s", failed_at, [r["wall_s"] for _, r in failed])
+        self._set("error", failed_at, [r["error"][:ERROR_CHARS] for _, r in failed])
+        self._set("status", done_at, [DONE] * len(done))
+        self._set("status", failed_at, [FAILED] * len(failed))
+
+    def write_references(self, batch: list[tuple[tuple, dict, dict]]) -> None:
+        """batch: [((torque, *parameter indices), parameters, result), …]. The linearized f_n uses
+        the inertias in force at the point."""
+        done = [(i, p, r) for i, p, r in batch if not r.get("error")]
+        failed = [(i, r) for i, _, r in batch if r.get("error")]
+        done_at, failed_at = [i for i, _, _ in done], [i for i, _ in failed]
+        for name, (source, _) in REFERENCE_MEASURES.items():
+            self._set(name, done_at, [r[source] for _, _, r in done])
+        tangent, secant = [], []
+        for _, parameters, result in done:
             inertias = {**self.start_values, **parameters}
 
             def f_n(stiffness: float) -> float:
-                return mesh_natural_frequency_hz(stiffness, self.pair_attrs["base_radius_1_m"],
-                                                 self.pair_attrs["base_radius_2_m"], inertias["inertia_1"],
-                                                 inertias["inertia_2"])
+                return mesh_natural_frequency_hz(stiffness, self.attrs["base_radius_1_m"], self.attrs["base_radius_2_m"],
+                                                 inertias["inertia_1"], inertias["inertia_2"])
 
-            tangent = f_n(result["mesh_stiffness_mean_n_per_m"])
-            secant = f_n(result["static_mesh_force_n"] / result["dte_mean_m"])
-            self.group["tangent_mesh_natural_frequency_hz"][index] = tangent
-            self.group["secant_mesh_natural_frequency_hz"][index] = secant
-            chosen = tangent if self.pair_attrs["natural_frequency_stiffness"].startswith("tangent") else secant
-            self.group["mesh_natural_frequency_hz"][index] = chosen
-            self.group["reference_error"][index] = ""
-            self.group["reference_status"][index] = DONE
-        else:
-            self.group["reference_error"][index] = result["error"][:ERROR_CHARS]
-            self.group["reference_status"][index] = FAILED
+            tangent.append(f_n(result["mesh_stiffness_mean_n_per_m"]))
+            secant.append(f_n(result["static_mesh_force_n"] / result["dte_mean_m"]))
+        self._set("tangent_mesh_natural_frequency_hz", done_at, tangent)
+        self._set("secant_mesh_natural_frequency_hz", done_at, secant)
+        use_tangent = self.attrs["natural_frequency_stiffness"].startswith("tangent")
+        self._set("mesh_natural_frequency_hz", done_at, tangent if use_tangent else secant)
+        self._set("reference_error", done_at, [""] * len(done))
+        self._set("reference_error", failed_at, [r["error"][:ERROR_CHARS] for _, r in failed])
+        self._set("reference_status", done_at, [DONE] * len(done))
+        self._set("reference_status", failed_at, [FAILED] * len(failed))
 
 
 def load(path: Path) -> xr.Dataset:
     """The whole store as an in-memory Dataset."""
-    with xr.open_zarr(str(path), consolidated=False) as ds:
+    # chunks=None: plain NumPy reads; one Dask task per one-point chunk would cost more than the data.
+    with xr.open_zarr(str(path), consolidated=False, chunks=None) as ds:
         return ds.load()

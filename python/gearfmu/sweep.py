@@ -133,11 +133,9 @@ def sweep(fmu: str | Path, grid: Grid, out: str | Path, *, client=None, schedule
     writer = store.Writer(out)
 
     def write(results: list) -> None:
-        for kind, index, result in results:
-            if kind == "point":
-                writer.write_point(index, result)
-            else:
-                writer.write_reference(index, grid.point((None, *index))[2], result)
+        writer.write_references([(index, grid.point((None, *index))[2], result)
+                                 for kind, index, result in results if kind == "reference"])
+        writer.write_points([(index, result) for kind, index, result in results if kind == "point"])
 
     bar = None
     if progress and tasks:
