@@ -965,7 +965,7 @@ fn pmor_resources() -> &'static (PathBuf, String) {
 /// dissipated energy never decreases; both flanks carried load; no drift: ω₂ averaged over the
 /// last 10 ms of every drive phase equals the closed form within 2e-3 (the viscous coupling is
 /// explicit over 0.1 ms), and the later cycles' mean the earlier ones' within the scatter.
-/// `PMOR_SOAK_CYCLES` sets the cycles (220 for the 10⁷ sub-steps of BENCHMARKS).
+/// `PMOR_SOAK_CYCLES` sets the cycles (224 for 10⁷ sub-steps).
 #[test]
 fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     use gearfmu::contact::mesh_kinematics::PairPlacement;
