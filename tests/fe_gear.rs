@@ -2,7 +2,7 @@
 //! rigid-body modes of the unclamped gear, and the involute's normals.
 
 use gearfmu::fe::assembly::{self, DofMap, Material};
-use gearfmu::fe::gear_mesh::{mesh_gear, section_area, MeshSpec, ProfileGrading};
+use gearfmu::fe::gear_mesh::{mesh_gear, section_area, GearMesh, MeshSpec, ProfileGrading};
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::gear::{GearPair, PairSpec};
 use std::path::Path;
@@ -116,15 +116,7 @@ fn half_turn_about_x_maps_the_mesh_onto_itself() {
     assert!(flank_checked > 100);
     let dofs = DofMap::unclamped(gm.mesh.nodes.len());
     let k = assembly::stiffness(&gm.mesh, &material(&p), Formulation::IncompatibleModes, &dofs);
-    let turn = |f: &[f64]| -> Vec<f64> {
-        let mut out = vec![0.0; f.len()];
-        for (n, &m) in map.iter().enumerate() {
-            out[3 * n] = f[3 * m];
-            out[3 * n + 1] = -f[3 * m + 1];
-            out[3 * n + 2] = -f[3 * m + 2];
-        }
-        out
-    };
+    let turn = |f: &[f64]| GearMesh::half_turn_field(&map, f);
     let field: Vec<f64> = (0..3 * map.len()).map(|d| ((d * 7919) % 1000) as f64 * 1e-3 - 0.5).collect();
     let (k_turned, turned_k) = (assembly::mul(&k, &turn(&field)), turn(&assembly::mul(&k, &field)));
     let scale = turned_k.iter().fold(0.0_f64, |a, v| a.max(v.abs()));

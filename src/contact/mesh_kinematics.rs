@@ -227,10 +227,7 @@ impl PairPlacement {
     /// interference), and backing gear 1 off by r_b1·Δθ opens each by at least the smallest arm
     /// ratio times it. Skipping such a flank changes no result; it saves its whole search.
     pub fn flank_can_close(&self, flank: Flank, theta: [f64; 2], reach_m: f64) -> bool {
-        let searched = match flank {
-            Flank::Drive => theta,
-            Flank::Coast => self.half_turn_angles(theta),
-        };
+        let searched = self.searched_angles(flank, theta);
         let te = self.pair.gear1.base_radius_m * searched[0] - self.pair.gear2.base_radius_m * searched[1];
         // Wrapped to the nearest tooth: the pair index absorbs whole base pitches.
         let pb = self.pair.base_pitch_m;
@@ -412,9 +409,17 @@ impl PairPlacement {
         [(1 - teeth[0] as i64).rem_euclid(z[0]) as usize, (-(teeth[1] as i64)).rem_euclid(z[1]) as usize]
     }
 
+    /// The angles of the pose where `flank` is the drive flank: this pose for the drive flanks,
+    /// the half-turned one for the coast flanks.
+    pub fn searched_angles(&self, flank: Flank, theta: [f64; 2]) -> [f64; 2] {
+        match flank {
+            Flank::Drive => theta,
+            Flank::Coast => self.half_turn_angles(theta),
+        }
+    }
+
     /// The contact of tooth pair j on the given flanks, searched in the pose where they are the
-    /// drive flanks (`section` and `z` of that pose): this pose for the drive flanks, the
-    /// half-turned one for the coast flanks.
+    /// drive flanks (`searched_angles`; `section` and `z` of that pose).
     pub fn flank_contact(
         &self,
         flank: Flank,
@@ -423,10 +428,7 @@ impl PairPlacement {
         section: usize,
         z: f64,
     ) -> Option<SectionContact> {
-        match flank {
-            Flank::Drive => self.section_contact(theta, j, section, z),
-            Flank::Coast => self.section_contact(self.half_turn_angles(theta), j, section, z),
-        }
+        self.section_contact(self.searched_angles(flank, theta), j, section, z)
     }
 
     /// The tooth pairs j that can touch anywhere along the face for θ₂ in one angular pitch

@@ -125,6 +125,18 @@ impl GearMesh {
             })
             .collect()
     }
+
+    /// A nodal field (3 per node) carried by the half turn: the field at each node's image,
+    /// turned, (u_x, u_y, u_z) → (u_x, −u_y, −u_z). `image` is [`GearMesh::half_turn_about_x`].
+    pub fn half_turn_field(image: &[usize], field: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; field.len()];
+        for (n, &m) in image.iter().enumerate() {
+            out[3 * n] = field[3 * m];
+            out[3 * n + 1] = -field[3 * m + 1];
+            out[3 * n + 2] = -field[3 * m + 2];
+        }
+        out
+    }
 }
 
 /// The transverse section of one sector: node positions (r, φ) and the index layout.

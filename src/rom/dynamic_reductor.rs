@@ -284,13 +284,7 @@ pub fn build_dynamic_model(
         // 1 − k here): one more tooth rotation.
         let shift = wraps + (i == 0) as i64;
         let turned = rotate_by_teeth(&fe[i].model.mesh, &fe[i].reconstructor.displacement(&c.reduced[i]), shift);
-        let mut field = vec![0.0; turned.len()];
-        for (n, &m) in half_turn.iter().enumerate() {
-            field[3 * n] = turned[3 * m];
-            field[3 * n + 1] = -turned[3 * m + 1];
-            field[3 * n + 2] = -turned[3 * m + 2];
-        }
-        field
+        GearMesh::half_turn_field(half_turn, &turned)
     };
     let ste_m: Vec<Vec<f64>> =
         (0..options.rom_torques_nm.len()).map(|t| (0..n_theta).map(|s| case(t, s).ste_m).collect()).collect();

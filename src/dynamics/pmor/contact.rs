@@ -233,10 +233,7 @@ pub fn contact_loads(
     let theta = [poses[0].theta, poses[1].theta];
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
     for flank in Flank::BOTH {
-        let searched = match flank {
-            Flank::Drive => theta,
-            Flank::Coast => place.half_turn_angles(theta),
-        };
+        let searched = place.searched_angles(flank, theta);
         let reach: f64 =
             (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();
         if !place.flank_can_close(flank, theta, reach) {
