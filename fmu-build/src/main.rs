@@ -55,6 +55,10 @@ struct RomOptions {
     /// load, and levels whose shapes coincide are refused (a singular mass matrix).
     #[arg(long, value_delimiter = ',', default_value = "250")]
     rom_torques_nm: Vec<f64>,
+    /// Load-sharing shapes per sample and flank beside the static ones (`rom::sharing`): they
+    /// let the pairs in mesh share a dynamic load differently from the static split.
+    #[arg(long, default_value_t = 1)]
+    sharing_shapes: usize,
     /// Depth h (mm) of the partial models and of the Hertz approach.
     #[arg(long, default_value_t = gearfmu::rom::reductor::DEFAULT_CONTACT_DEPTH_M * 1e3)]
     depth_mm: f64,
@@ -449,6 +453,7 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
         modes: rom.modes,
         angles: rom.angles,
         rom_torques_nm: rom.rom_torques_nm.clone(),
+        sharing_shapes: rom.sharing_shapes,
         depth_m: rom.depth_mm * 1e-3,
         p_en: rom.p_en,
         interpolation: match rom.interpolation {
@@ -466,7 +471,7 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
         let g = &model.gears[i];
         let hz = &report.modes_hz[i];
         println!(
-            "gear {}: {} eigenmodes ({:.0} … {:.0} Hz) + {} shapes × {} angles; span Φ invariance residual {:.1e}; shape closure residual {:.1e}; polar inertia {:.6e} kg·m² (exact {:.6e}); SVD kept {}",
+            "gear {}: {} eigenmodes ({:.0} … {:.0} Hz) + {} shapes × {} angles; span Φ invariance residual {:.1e}; shape closure residual {:.1e}; smallest shape Gram ratio {:.1e}; polar inertia {:.6e} kg·m² (exact {:.6e}); SVD kept {}",
             i + 1,
             g.modes(),
             hz[0],
@@ -475,6 +480,7 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
             g.samples,
             report.invariance_residual[i],
             report.closure_residual[i],
+            report.shape_gram_ratio[i],
             report.polar_inertia_kgm2[i].0,
             report.polar_inertia_kgm2[i].1,
             report.n_sv[i],

@@ -16,6 +16,7 @@
 
 use super::flank::FlankGrid;
 use super::reductor::{pmor_hertz, Reconstructor, ReducedGear};
+use super::sharing;
 use super::statics::{ContactModel, StaticModel};
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
@@ -42,6 +43,9 @@ pub struct DynamicBuildOptions {
     pub angles: usize,
     /// Torque levels on gear 1 of the static analyses (N·m).
     pub rom_torques_nm: Vec<f64>,
+    /// Load-sharing shapes per sample and flank beside the static ones (`rom::sharing`: orders
+    /// 1 … this).
+    pub sharing_shapes: usize,
     pub depth_m: f64,
     pub p_en: f64,
     pub law: ApproachLaw,
@@ -56,6 +60,7 @@ impl Default for DynamicBuildOptions {
             modes: 20,
             angles: 40,
             rom_torques_nm: vec![250.0],
+            sharing_shapes: 1,
             depth_m: crate::rom::reductor::DEFAULT_CONTACT_DEPTH_M,
             p_en: crate::rom::svd::DEFAULT_P_EN,
             law: ApproachLaw::Weber,
@@ -75,10 +80,14 @@ pub struct DynamicBuildReport {
     pub invariance_residual: [f64; 2],
     /// Per gear: (Gx)ᵀM(Gx) against the exact inertia from the profile.
     pub polar_inertia_kgm2: [(f64, f64); 2],
-    /// Per gear: ‖S(pitch) − P·S(0)‖_M / ‖S(0)‖_M from one extra static case per torque.
+    /// Per gear: the largest ‖S(pitch) − P·S(0)‖_M over the columns (unit modal mass each), from
+    /// one extra sample one pitch on.
     pub closure_residual: [f64; 2],
     /// Per gear: max |ΦᵀM S| of the stored shapes (0 by construction up to round-off).
     pub residualization: [f64; 2],
+    /// Per gear: the smallest ratio of the extreme eigenvalues of a sample's shape Gram matrix
+    /// (1: orthogonal shapes; near 0: nearly parallel).
+    pub shape_gram_ratio: [f64; 2],
     /// STE (m) of the static analyses, per torque, per sample.
     pub ste_m: Vec<Vec<f64>>,
     pub n_sv: [usize; 2],
@@ -278,13 +287,26 @@ pub fn build_dynamic_model(
             Ok((wraps as i64, statics.solve(theta2 - wraps * pitch2, options.rom_torques_nm[t])?))
         })
         .collect::<Result<Vec<_>, String>>()?;
+    // A field of the half-turned pose, wrapped by `wraps` teeth, turned back onto gear i.
+    // Gear 1's half-turned pose is one pitch behind the exact image (its tooth k is tooth 1 − k
+    // here): one more tooth rotation.
+    let turn_back = |i: usize, wraps: i64, field: &[f64], half_turn: &[usize]| -> Vec<f64> {
+        let turned = rotate_by_teeth(&fe[i].model.mesh, field, wraps + (i == 0) as i64);
+        GearMesh::half_turn_field(half_turn, &turned)
+    };
     let coast_field = |i: usize, t: usize, s: usize, half_turn: &[usize]| -> Vec<f64> {
         let (wraps, c) = &coast_cases[(i * options.rom_torques_nm.len() + t) * (n_theta + 1) + s];
-        // Gear 1's half-turned pose is one pitch behind the exact image (its tooth k is tooth
-        // 1 − k here): one more tooth rotation.
-        let shift = wraps + (i == 0) as i64;
-        let turned = rotate_by_teeth(&fe[i].model.mesh, &fe[i].reconstructor.displacement(&c.reduced[i]), shift);
-        GearMesh::half_turn_field(half_turn, &turned)
+        turn_back(i, *wraps, &fe[i].reconstructor.displacement(&c.reduced[i]), half_turn)
+    };
+    // The load-sharing shapes (`rom::sharing`), on the drive flanks at gear 2's sample angle and
+    // on the coast flanks through the same half turn as the coast statics.
+    let sharing_field = |i: usize, theta2: f64, order: usize| -> Vec<f64> {
+        fe[i].reconstructor.displacement(&sharing::sharing_load(&place, &fe[i].reduced, i, theta2, order))
+    };
+    let coast_sharing_field = |i: usize, s: usize, order: usize, half_turn: &[usize]| -> Vec<f64> {
+        let theta2 = half_turned_theta2(i, s);
+        let wraps = (theta2 / pitch2).floor();
+        turn_back(i, wraps as i64, &sharing_field(i, theta2 - wraps * pitch2, order), half_turn)
     };
     let ste_m: Vec<Vec<f64>> =
         (0..options.rom_torques_nm.len()).map(|t| (0..n_theta).map(|s| case(t, s).ste_m).collect()).collect();
@@ -295,20 +317,28 @@ pub fn build_dynamic_model(
     let mut inertia = [(0.0, 0.0); 2];
     let mut closure = [0.0_f64; 2];
     let mut residualization = [0.0; 2];
+    let mut gram_ratio = [1.0_f64; 2];
     for (i, g) in fe.iter().enumerate() {
         progress(format!("gear {}: shapes and invariants", i + 1));
         let gear = if i == 0 { &pair.gear1 } else { &pair.gear2 };
         let gm = &g.model.mesh;
         let m_times = |f: &[f64]| assembly::mul(&g.mass_full, f);
         let n_torques = options.rom_torques_nm.len();
-        let n_t = 2 * n_torques;
-        // Raw shapes per sample (0..=n_θ) as full nodal fields: per torque on the drive flanks,
-        // then per torque on the coast flanks.
+        let per_flank = n_torques + options.sharing_shapes;
+        let n_t = 2 * per_flank;
+        // Raw shapes per sample (0..=n_θ) as full nodal fields: on the drive flanks one per
+        // torque, then the sharing shapes; then the same on the coast flanks.
         let half_turn = gm.half_turn_about_x()?;
+        let orders = 1..=options.sharing_shapes;
         let raw: Vec<Vec<Vec<f64>>> = (0..=n_theta)
+            .into_par_iter()
             .map(|s| {
+                let theta2 = pitch2 * s as f64 / n_theta as f64;
                 let drive = (0..n_torques).map(|t| g.reconstructor.displacement(&case(t, s).reduced[i]));
-                drive.chain((0..n_torques).map(|t| coast_field(i, t, s, &half_turn))).collect()
+                let drive_sharing = orders.clone().map(|m| sharing_field(i, theta2, m));
+                let coast = (0..n_torques).map(|t| coast_field(i, t, s, &half_turn));
+                let coast_sharing = orders.clone().map(|m| coast_sharing_field(i, s, m, &half_turn));
+                drive.chain(drive_sharing).chain(coast).chain(coast_sharing).collect()
             })
             .collect();
         // Residual against Φ (Eq. 14), then each scaled to unit modal mass. The torque levels of
@@ -336,30 +366,29 @@ pub fn build_dynamic_model(
                 .collect()
         };
         let base: Vec<Vec<Vec<f64>>> = raw[..n_theta].iter().map(|f| clean(f)).collect();
-        // Several torque levels must give shapes that differ: the global contact shapes of
-        // PMOR-Hertz are nearly proportional to the load (the nonlinear local part is the analytic
-        // Hertz law), so two levels are often the same direction to 1e-10, which makes the mass
-        // matrix singular. Refuse that instead of integrating noise. (A drive and a coast shape
-        // load opposite flanks and always differ.)
-        if n_torques > 1 {
-            for (s_idx, sample) in base.iter().enumerate() {
-                let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_times(&sample[r]), &sample[c]));
-                let eig = nalgebra::SymmetricEigen::new(gram).eigenvalues;
-                let (lo, hi) = (eig.min(), eig.max());
-                if lo < 1e-6 * hi {
-                    return Err(format!(
-                        "gear {}: the global contact shapes of the torque levels {:?} N·m coincide at angle sample {s_idx} (Gram eigenvalue ratio {:.1e} < 1e-6): they add no direction; use one torque level (--rom-torques-nm)",
-                        i + 1,
-                        options.rom_torques_nm,
-                        lo / hi
-                    ));
-                }
+        // The shapes of one sample must span n_t directions. Several torque levels often do
+        // not: the global contact shapes of PMOR-Hertz are nearly proportional to the load (the
+        // nonlinear local part is the analytic Hertz law), so two levels are the same direction
+        // to 1e-10 and the mass matrix is singular. Refuse that instead of integrating noise. (A
+        // drive and a coast shape load opposite flanks; a sharing shape is never parallel to the
+        // static one, `rom::sharing`.)
+        for (s_idx, sample) in base.iter().enumerate() {
+            let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_times(&sample[r]), &sample[c]));
+            let eig = nalgebra::SymmetricEigen::new(gram).eigenvalues;
+            let ratio = eig.min() / eig.max();
+            gram_ratio[i] = gram_ratio[i].min(ratio);
+            if ratio < 1e-6 {
+                return Err(format!(
+                    "gear {}: the shapes of angle sample {s_idx} (torque levels {:?} N·m, {} sharing shapes) are linearly dependent (Gram eigenvalue ratio {ratio:.1e} < 1e-6): torque levels add no direction where the contact pattern does not change, and the shapes per flank cannot outnumber the tooth pairs within the sharing window (two at some angles of a spur pair); use one torque level (--rom-torques-nm) and fewer sharing shapes (--sharing-shapes)",
+                    i + 1,
+                    options.rom_torques_nm,
+                    options.sharing_shapes,
+                ));
             }
         }
-        // Closure check: the sample one pitch on against P·S₀ (first torque's shapes, drive and
-        // coast).
+        // Closure check: the sample one pitch on against P·S₀, every column.
         let one_on = clean(&raw[n_theta]);
-        for column in [0, n_torques] {
+        for column in 0..n_t {
             let p_s0 = rotate_by_teeth(gm, &base[0][column], 1);
             let diff: Vec<f64> = one_on[column].iter().zip(&p_s0).map(|(a, b)| a - b).collect();
             closure[i] = closure[i].max(dot(&m_times(&diff), &diff).sqrt());
@@ -503,6 +532,7 @@ pub fn build_dynamic_model(
         rk4_limit_s: 0.0,
         info: PmorBuildInfo {
             rom_torques_nm: options.rom_torques_nm.clone(),
+            sharing_shapes: options.sharing_shapes,
             depth_m: options.depth_m,
             law: options.law,
             p_en: options.p_en,
@@ -520,6 +550,7 @@ pub fn build_dynamic_model(
         polar_inertia_kgm2: inertia,
         closure_residual: closure,
         residualization,
+        shape_gram_ratio: gram_ratio,
         ste_m,
         n_sv: [fe[0].n_sv, fe[1].n_sv],
     };

@@ -5,6 +5,7 @@ pub mod attachment;
 pub mod dynamic_reductor;
 pub mod flank;
 pub mod reductor;
+pub mod sharing;
 pub mod statics;
 pub mod svd;
 pub mod sweep;

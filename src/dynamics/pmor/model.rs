@@ -4,8 +4,9 @@
 //!
 //! Per gear, in its floating frame (design §4.5): u = V(ϑ)η with V = [Φ, Ψ(ϑ)], Φ the n_k lowest
 //! fixed-bore eigenmodes (mass-normalized), Ψ(ϑ) = Σₐ wₐ(ϑ)·S_a the interpolated global contact
-//! shapes (n_t columns per angular sample, one per torque level and loaded flank, drive and
-//! coast, residual against Φ and of unit modal mass each).
+//! shapes (n_t columns per angular sample: per loaded flank, drive then coast, one per torque
+//! level and then the load-sharing shapes of `rom::sharing`; residual against Φ and of unit
+//! modal mass each).
 //! ϑ is the gear's angle within its reference pitch; the samples are ϑ_s = s·Δϑ and one pitch on
 //! a shape is the one-tooth rotation of the first (S_{s+n_θ} = P·S_s), stored explicitly for
 //! s = −2 … n_θ + 2 so that every interpolation interval in [−Δϑ, pitch + Δϑ) has its four
@@ -62,8 +63,8 @@ pub struct PmorGear {
     pub samples: usize,
     /// Eigenvalues ω² of Φ (rad²/s²), ascending.
     pub eigenvalues: Vec<f64>,
-    /// Shapes per sample n_t: one per torque level loading the drive flanks, then one per torque
-    /// level loading the coast flanks (`rom::dynamic_reductor`).
+    /// Shapes per sample n_t: on the drive flanks one per torque level and the load-sharing
+    /// shapes, then the same on the coast flanks (`rom::dynamic_reductor`).
     pub shapes: usize,
     /// R = ΦᵀM P⁻¹Φ: the coordinates of Φ one pitch back in Φ (orthogonal when span Φ is
     /// invariant under the tooth rotation). When ϑ passes a pitch, η_Φ ← R·η_Φ.
@@ -140,6 +141,8 @@ impl PmorGear {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PmorBuildInfo {
     pub rom_torques_nm: Vec<f64>,
+    /// Load-sharing shapes per sample and flank (`rom::sharing`).
+    pub sharing_shapes: usize,
     pub depth_m: f64,
     pub law: ApproachLaw,
     pub p_en: f64,
