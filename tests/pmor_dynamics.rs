@@ -261,20 +261,23 @@ fn example_3_dte(m: &PmorModel) -> (f64, f64) {
     (mean, hi - lo)
 }
 
-/// The load-sharing shapes (`rom::sharing`), evidence by convergence in a modelling choice that
-/// should not matter: the torque the static shapes are taken at. With one static shape per
-/// sample the split of the load between the pairs in mesh is frozen at that torque's. Example 3
-/// runs at 185 N·m, and its DTE peak-to-peak (the ringing after each pair's entry) then moves
-/// by several per cent between shapes taken at 185 and at 250 N·m (the control, asserted
-/// > 3 %, so that the test can fail). With the sharing shape the two agree within 1 %.
+/// The load-sharing shapes (`rom::sharing`), evidence by convergence in modelling choices that
+/// should not matter: the torque the static shapes are taken at, and the angular samples. With
+/// one static shape per sample the split of the load between the pairs in mesh is frozen at
+/// that torque's. Example 3 runs at 185 N·m, and with 40 samples its DTE peak-to-peak (the
+/// ringing after each pair's entry) moves by several per cent between shapes taken at 185 and
+/// at 250 N·m (the control, asserted > 3 %, so that the test can fail). With the sharing shape
+/// the default build (20 samples, 250 N·m) and one with 40 samples at 185 N·m agree within 1 %.
 #[test]
 fn dte_peak_to_peak_follows_the_load_not_the_rom_torque_with_sharing_shapes() {
     let f = fixture();
     assert_eq!(f.model.info.rom_torques_nm, vec![250.0]);
     assert_eq!(f.model.info.sharing_shapes, 1);
+    assert_eq!(f.model.gears[0].samples, 20);
     let pair = common::kurokawa_spur();
     let build = |torque: f64, sharing_shapes: usize| {
-        let options = DynamicBuildOptions { rom_torques_nm: vec![torque], sharing_shapes, ..Default::default() };
+        let options =
+            DynamicBuildOptions { rom_torques_nm: vec![torque], sharing_shapes, angles: 40, ..Default::default() };
         build_dynamic_model(&pair, &MeshSpec::default(), &options, |_| {}).unwrap().0
     };
     let pp = |m: &PmorModel| example_3_dte(m).1;
@@ -282,7 +285,7 @@ fn dte_peak_to_peak_follows_the_load_not_the_rom_torque_with_sharing_shapes() {
     let without = [pp(&build(250.0, 0)), pp(&build(185.0, 0))];
     let change = |v: [f64; 2]| v[1] / v[0] - 1.0;
     eprintln!(
-        "example 3 DTE p-p, shapes at 250 / 185 N·m: with the sharing shape {:.4} / {:.4} µm ({:+.2} %), without {:.4} / {:.4} µm ({:+.2} %)",
+        "example 3 DTE p-p: with the sharing shape, 20 samples at 250 N·m {:.4} µm, 40 at 185 N·m {:.4} µm ({:+.2} %); without, 40 samples at 250 / 185 N·m {:.4} / {:.4} µm ({:+.2} %)",
         with[0] * 1e6,
         with[1] * 1e6,
         100.0 * change(with),

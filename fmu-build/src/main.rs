@@ -48,7 +48,7 @@ struct RomOptions {
     #[arg(long, default_value_t = 20)]
     modes: usize,
     /// Angular samples of the global contact shapes per mesh cycle n_θ.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 20)]
     angles: usize,
     /// Torque levels on gear 1 of the static analyses (N·m), comma-separated: n_t shapes per
     /// sample. One level by default: PMOR-Hertz's global shapes are nearly proportional to the

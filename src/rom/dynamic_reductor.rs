@@ -58,7 +58,7 @@ impl Default for DynamicBuildOptions {
     fn default() -> Self {
         DynamicBuildOptions {
             modes: 20,
-            angles: 40,
+            angles: 20,
             rom_torques_nm: vec![250.0],
             sharing_shapes: 1,
             depth_m: crate::rom::reductor::DEFAULT_CONTACT_DEPTH_M,
