@@ -953,9 +953,9 @@ fn pmor_resources() -> &'static (PathBuf, String) {
     })
 }
 
-/// Soak of the PMOR-Hertz FMU (issue 13, item 4, for the model that landed later): 1.03·10⁶ RK4
-/// sub-steps (32 200 communication steps of 0.1 ms at the model's own max_step, 3.2 s of
-/// simulated time) through the five regimes of the lumped soak, 23 cycles of drive (40 ms,
+/// Soak of the PMOR-Hertz FMU (issue 13, item 4, for the model that landed later): 1.16·10⁶ RK4
+/// sub-steps (32 200 communication steps of 0.1 ms at the model's own max_step, 2.8 µs; 3.2 s
+/// of simulated time) through the five regimes of the lumped soak, 23 cycles of drive (40 ms,
 /// 185 N·m on gear 1, a viscous load of 20 N·m·s/rad on gear 2), brake (20 ms, −60 N·m: the
 /// coast flanks carry it, across the backlash), free flight (20 ms, no torque), rattle (20 ms,
 /// ±25 N·m at 37 Hz, a light load) and drive again (40 ms). Checked, independently of the FMU's
@@ -965,7 +965,7 @@ fn pmor_resources() -> &'static (PathBuf, String) {
 /// dissipated energy never decreases; both flanks carried load; no drift: ω₂ averaged over the
 /// last 10 ms of every drive phase equals the closed form within 2e-3 (the viscous coupling is
 /// explicit over 0.1 ms), and the later cycles' mean the earlier ones' within the scatter.
-/// `PMOR_SOAK_CYCLES` sets the cycles (224 for 10⁷ sub-steps).
+/// `PMOR_SOAK_CYCLES` sets the cycles (199 for 10⁷ sub-steps at 2.8 µs).
 #[test]
 fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     use gearfmu::contact::mesh_kinematics::PairPlacement;
@@ -1097,7 +1097,8 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
 /// follows the instance's own parameters. A raised mesh damping ratio (90 % on the shapes
 /// instead of the build's 5 %) puts eigenvalues near the negative real axis whose RK4 limit lies
 /// below the default max_step (measured with `linear::rk4_limit_under_load` at 4 × the ROM
-/// torque: 5.4 µs at 5 %, 3.5 µs at 50 %, 1.5 µs at 99 %; the default step is 3.2 µs):
+/// torque, before the load-sharing shapes: 5.4 µs at 5 %, 3.5 µs at 50 %, 1.5 µs at 99 %, and
+/// 0.73 µs at 90 % with them; the default step is 2.8 µs):
 /// ExitInitializationMode refuses it with the limit in the log line (linearized again with the
 /// instance's damping), and accepts it with max_step below that limit, where the pair then
 /// steps under load. The build's own parameters keep the stored limit.
