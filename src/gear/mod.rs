@@ -73,7 +73,7 @@ impl Gear {
         // The involute holds from the form circle up (the rack's straight flank generates it);
         // the fillet table, whose discrete end lies near that point, is used only below it.
         match self.fillet.last() {
-            Some(&(r_join, _)) if radius_m < r_join.min(self.form_radius_m) => {
+            Some(&(r_join, _)) if self.fillet.len() >= 2 && radius_m < r_join.min(self.form_radius_m) => {
                 let i = self.fillet.partition_point(|&(r, _)| r < radius_m).clamp(1, self.fillet.len() - 1);
                 let ((r0, a0), (r1, a1)) = (self.fillet[i - 1], self.fillet[i]);
                 a0 + (a1 - a0) * (radius_m - r0) / (r1 - r0)
@@ -204,6 +204,15 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         return Err(invalid(
             "rack.cutter_tip_radius_coefficient",
             "must be in [0, 0.6] with dedendum_coefficient > addendum_coefficient (tip clearance)",
+        ));
+    }
+    // The cutter's tip round rises ρ_f·(1 − sin α_n) above its tip line; it must fit within the
+    // cutter's addendum, the gear's dedendum, or the cutter has no straight flank to generate
+    // an involute (found by fuzzing: addendum 1e-6, dedendum 1.25e-6 panicked in the fillet).
+    if rho_f * (1.0 - rack.pressure_angle_deg.to_radians().sin()) >= hf {
+        return Err(invalid(
+            "rack.dedendum_coefficient",
+            "must exceed the height of the cutter's tip round, cutter_tip_radius_coefficient·(1 − sin α_n)",
         ));
     }
     let mat = &spec.material;
