@@ -133,16 +133,25 @@ struct Resources {
     model_bin: Vec<u8>,
     /// The max_step an instance starts with.
     default_max_step_s: f64,
+    /// Whether reading mesh_force or mesh_stiffness may be refused: PMOR-Hertz evaluates the
+    /// contact for them, and a state outside the Hertz law's range is an error, not a number.
+    contact_outputs_can_fail: bool,
 }
 
 /// A resources folder holding `model` for `pair`, under the process's temporary directory.
-fn write_resources(folder: &str, pair: &GearPair, model: ModelKind, default_max_step_s: f64) -> Resources {
+fn write_resources(
+    folder: &str,
+    pair: &GearPair,
+    model: ModelKind,
+    default_max_step_s: f64,
+    contact_outputs_can_fail: bool,
+) -> Resources {
     let guid = ModelFile::compute_guid(gearfmu::interface::VARIABLES_TOML, &pair.name, &model);
     let dir = std::env::temp_dir().join(format!("gearfmu-fuzz-{}", std::process::id())).join(folder);
     std::fs::create_dir_all(&dir).unwrap();
     let model_bin = ModelFile { guid: guid.clone(), pair_name: pair.name.clone(), model }.to_bytes();
     std::fs::write(dir.join(FILE_NAME), &model_bin).unwrap();
-    Resources { dir, guid, model_bin, default_max_step_s }
+    Resources { dir, guid, model_bin, default_max_step_s, contact_outputs_can_fail }
 }
 
 fn kurokawa_spur() -> GearPair {
@@ -158,7 +167,7 @@ fn resources() -> &'static Resources {
         log::set_max_level(log::LevelFilter::Trace);
         let pair = kurokawa_spur();
         let model = ModelKind::Lumped(LumpedMesh::from_pair(&pair).unwrap());
-        write_resources("resources", &pair, model, LUMPED_DEFAULT_MAX_STEP_S)
+        write_resources("resources", &pair, model, LUMPED_DEFAULT_MAX_STEP_S, false)
     })
 }
 
@@ -173,7 +182,7 @@ fn pmor_resources() -> &'static Resources {
         let options = DynamicBuildOptions { modes: 6, angles: 8, ..Default::default() };
         let (model, _) = build_dynamic_model(&pair, &MeshSpec::default(), &options, |_| {}).unwrap();
         let max_step = model.max_step_s;
-        write_resources("resources-pmor", &pair, ModelKind::PmorHertz(Box::new(model)), max_step)
+        write_resources("resources-pmor", &pair, ModelKind::PmorHertz(Box::new(model)), max_step, true)
     })
 }
 
@@ -912,6 +921,8 @@ struct Machine {
     pool: Vec<(fmi2FMUstate, Record)>,
     /// The max_step an instance starts with (and returns to at Reset).
     default_max_step_s: f64,
+    /// `Resources::contact_outputs_can_fail`.
+    contact_outputs_can_fail: bool,
 }
 
 fn fresh(max_step: f64) -> Record {
@@ -1000,7 +1011,12 @@ fn run_call(
                         prop_assert_eq!(values[i], before.max_step, "max_step read back");
                     }
                 }
-                (s, vec![OK], vec![before.phase])
+                let contact = [vr("mesh_force"), vr("mesh_stiffness")];
+                if m.contact_outputs_can_fail && vrs.iter().any(|r| contact.contains(r)) {
+                    (s, vec![OK, ERR], vec![before.phase, error_phase])
+                } else {
+                    (s, vec![OK], vec![before.phase])
+                }
             } else {
                 (s, vec![ERR], vec![error_phase])
             }
@@ -1160,8 +1176,12 @@ fn call_sequences(target: &'static str, r: &'static Resources, short: u32) {
     fuzz(target, short, strategy, |calls| {
         let name = unique_name("seq");
         let c = instantiate_from(&name, r);
-        let mut m =
-            Machine { rec: fresh(r.default_max_step_s), pool: Vec::new(), default_max_step_s: r.default_max_step_s };
+        let mut m = Machine {
+            rec: fresh(r.default_max_step_s),
+            pool: Vec::new(),
+            default_max_step_s: r.default_max_step_s,
+            contact_outputs_can_fail: r.contact_outputs_can_fail,
+        };
         let result = no_panic("an FMI call sequence", &calls, || -> Result<(), TestCaseError> {
             for (k, call) in calls.iter().enumerate() {
                 let call = &match call {
@@ -1256,6 +1276,28 @@ fn regression_teeth_too_low_for_the_cutter_round_are_refused() {
     );
     let err = PairSpec::from_toml(&text).and_then(|s| GearPair::from_spec(&s)).map(|_| ()).unwrap_err();
     assert!(err.to_string().contains("rack.dedendum_coefficient"), "{err}");
+}
+
+/// Found by the PMOR-Hertz call-sequence target: with a start angle that presses the flanks
+/// beyond the Hertz law's range, a GetReal of tau_1 failed, because every output of an
+/// uninitialized PMOR-Hertz instance evaluated the contact. Angles, speeds and inputs need no
+/// contact; the contact outputs at such a state are an error with a log line, not a number.
+#[test]
+fn regression_pmor_outputs_without_contact_do_not_evaluate_it() {
+    let name = unique_name("pmor-start");
+    let c = instantiate_from(&name, pmor_resources());
+    let (start, tau, force) = (vr("phi_1_start"), vr("tau_1"), vr("mesh_force"));
+    assert_eq!(fmi2SetReal(c, &start, 1, &0.392), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    let mut value = f64::NAN;
+    assert_eq!(fmi2GetReal(c, &tau, 1, &mut value), OK, "{:?}", take_logs(&name));
+    assert_eq!(value, 0.0);
+    assert_eq!(fmi2GetReal(c, &start, 1, &mut value), OK);
+    assert_eq!(value, 0.392);
+    assert_eq!(fmi2GetReal(c, &force, 1, &mut value), ERR);
+    let logs = take_logs(&name);
+    assert!(logs.iter().any(|l| l.contains("Hertz")), "{logs:?}");
+    fmi2FreeInstance(c);
 }
 
 #[test]

@@ -420,6 +420,13 @@ impl Model for GearPairFmu {
                 let needs_contact = matches!(var, Var::MeshForce | Var::MeshStiffness);
                 match &s.pmor {
                     Some(p) if !needs_contact => (p.theta, p.omega, f64::NAN, f64::NAN),
+                    // Before initialization the pair sits at its start values with η = 0: angles
+                    // and speeds need no contact evaluation, which a start angle pressing the
+                    // flanks beyond Hertz's range would refuse (found by fuzzing: a GetReal of
+                    // tau_1 failed on it).
+                    None if !needs_contact => {
+                        ([s.mech.theta_1, s.mech.theta_2], [s.mech.omega_1, s.mech.omega_2], f64::NAN, f64::NAN)
+                    }
                     _ => {
                         let (out, p) = self.pmor_outputs(s)?.expect("PMOR-Hertz physics");
                         (p.theta, p.omega, out.contact.normal_force_n, out.contact.tangent_stiffness_n_per_m)
