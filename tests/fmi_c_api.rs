@@ -807,6 +807,18 @@ fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
     fmi2FreeInstance(c);
 }
 
+/// The soaks' inputs in each phase of a cycle (time `local_s` within the phase, gear 2's speed
+/// `w2`): drive (185 N·m, viscous load 20 N·m·s/rad), brake (−60 N·m: the coast flanks), free
+/// flight, rattle (±25 N·m at 37 Hz against a light load), drive.
+fn soak_torques(phase: usize, local_s: f64, w2: f64) -> (f64, f64) {
+    match phase {
+        0 | 4 => (185.0, -20.0 * w2),
+        1 => (-60.0, -20.0 * w2),
+        2 => (0.0, 0.0),
+        _ => (25.0 * (2.0 * std::f64::consts::PI * 37.0 * local_s).sin(), -1.0 * w2),
+    }
+}
+
 /// Soak (issue 13, item 4): 10⁶ communication steps of 0.1 ms (10⁷ RK4 sub-steps at the default
 /// max_step) through five regimes, 143 cycles of 7000 steps: drive (0.2 s, 185 N·m on gear 1, a viscous
 /// load of 20 N·m·s/rad on gear 2), brake (−60 N·m on gear 1 against the load: the coast flanks
@@ -874,12 +886,7 @@ fn soak_a_million_steps_through_drive_brake_free_flight_and_rattle() {
                 // Phase-local time: every cycle sees the same inputs.
                 let local = k as f64 * h;
                 let w2 = read(c, w_2);
-                let (tau_1, tau_2) = match phase {
-                    0 | 4 => (185.0, -20.0 * w2),
-                    1 => (-60.0, -20.0 * w2),
-                    2 => (0.0, 0.0),
-                    _ => (25.0 * (2.0 * std::f64::consts::PI * 37.0 * local).sin(), -1.0 * w2),
-                };
+                let (tau_1, tau_2) = soak_torques(phase, local, w2);
                 assert_eq!(fmi2SetReal(c, &tau[0], 1, &tau_1), OK);
                 assert_eq!(fmi2SetReal(c, &tau[1], 1, &tau_2), OK);
                 assert_eq!(fmi2DoStep(c, t, h, 1), OK, "step {step}: {:?}", logs("soak").last());
@@ -1022,12 +1029,7 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
             for k in 0..steps {
                 let local = k as f64 * h;
                 let w2 = read(c, w_2);
-                let (tau_1, tau_2) = match phase {
-                    0 | 4 => (185.0, -20.0 * w2),
-                    1 => (-60.0, -20.0 * w2),
-                    2 => (0.0, 0.0),
-                    _ => (25.0 * (2.0 * std::f64::consts::PI * 37.0 * local).sin(), -1.0 * w2),
-                };
+                let (tau_1, tau_2) = soak_torques(phase, local, w2);
                 assert_eq!(fmi2SetReal(c, &tau[0], 1, &tau_1), OK);
                 assert_eq!(fmi2SetReal(c, &tau[1], 1, &tau_2), OK);
                 assert_eq!(fmi2DoStep(c, step as f64 * h, h, 1), OK, "step {step}: {:?}", logs("pmor-soak").last());

@@ -169,22 +169,26 @@ fn static_limit(name: &str, f: &Fixture) {
         a.1 + (b.1 - a.1) * (theta2 - a.0) / (b.0 - a.0)
     };
     let dte: Vec<f64> = (0..STATIC_ANGLES).map(|k| at(pitch2 * (k as f64 + 0.5) / STATIC_ANGLES as f64)).collect();
-    let ste = table.clone();
+    assert_reproduces_the_statics(&format!("{name}: static limit at {torque} N·m"), &dte, table);
+}
+
+/// A TE curve against the statics' over a mesh cycle: mean within 2 %, peak-to-peak within 5 %
+/// (the static limit's bounds), printed either way.
+fn assert_reproduces_the_statics(label: &str, got: &[f64], ste: &[f64]) {
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let p2p = |v: &[f64]| v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min);
-    let (md, ms) = (mean(&dte), mean(&ste));
-    let (pd, ps) = (p2p(&dte), p2p(&ste));
+    let (mg, ms, pg, ps) = (mean(got), mean(ste), p2p(got), p2p(ste));
     eprintln!(
-        "{name}: static limit at {torque} N·m: mean DTE {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
-        md * 1e6,
+        "{label}: mean {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
+        mg * 1e6,
         ms * 1e6,
-        (md / ms - 1.0) * 100.0,
-        pd * 1e6,
+        (mg / ms - 1.0) * 100.0,
+        pg * 1e6,
         ps * 1e6,
-        (pd / ps - 1.0) * 100.0
+        (pg / ps - 1.0) * 100.0
     );
-    assert!((md / ms - 1.0).abs() < 0.02);
-    assert!((pd / ps - 1.0).abs() < 0.05);
+    assert!((mg / ms - 1.0).abs() < 0.02, "{label}: mean");
+    assert!((pg / ps - 1.0).abs() < 0.05, "{label}: p-p");
 }
 
 #[test]
@@ -209,44 +213,48 @@ fn slow_run_reproduces_the_static_transmission_error_of_the_helical_pair() {
 fn example_3_reaches_the_closed_form_speed_and_the_static_mean() {
     let f = fixture();
     let m = &f.model;
-    let dynamics = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
-    let mut s = m.initial_state([0.0, 0.0], [0.0, 0.0]);
-    let (h, t_end) = (m.max_step_s, 25e-3);
-    let steps = (t_end / h) as usize;
-    let mut record = Vec::with_capacity(steps);
     let started = std::time::Instant::now();
-    for k in 0..steps {
-        let t = k as f64 * h;
-        let tau1 = if t < 5e-3 { 185.0 * 0.5 * (1.0 - (PI * t / 5e-3).cos()) } else { 185.0 };
-        let load = -20.0 * s.omega[1];
-        dynamics.step(&mut s, [tau1, load], h).unwrap();
-        record.push((t + h, s.theta[1], s.omega[1], te(m, &s)));
-    }
+    let run = example_3(m);
     let wall = started.elapsed().as_secs_f64();
     let z = [m.pair.gear1.teeth as f64, m.pair.gear2.teeth as f64];
     let w2_steady = 185.0 * z[1] / z[0] / 20.0;
-    let w2 = s.omega[1];
-    // Mean DTE over the last whole mesh cycle of gear 2.
-    let pitch2 = 2.0 * PI / z[1];
-    let last = record.last().unwrap().1;
-    let cycle: Vec<f64> = record.iter().filter(|r| r.1 > last - pitch2).map(|r| r.3).collect();
-    let mean_dte = cycle.iter().sum::<f64>() / cycle.len() as f64;
+    let w2 = run.omega2_end;
+    let mean_dte = run.dte_mean_m();
     let mean_ste = f.statics[0].iter().sum::<f64>() / f.statics[0].len() as f64;
-    eprintln!("example 3: ω₂(25 ms) = {w2:.4} rad/s (closed form {w2_steady:.4}); mean DTE over the last mesh cycle {:.4} µm, STE at 185 N·m {:.4} µm; {:.1} s wall for {steps} RK4 steps",
-        mean_dte * 1e6, mean_ste * 1e6, wall);
+    eprintln!("example 3: ω₂(25 ms) = {w2:.4} rad/s (closed form {w2_steady:.4}); mean DTE over the last mesh cycle {:.4} µm, STE at 185 N·m {:.4} µm; {:.1} s wall for {} RK4 steps",
+        mean_dte * 1e6, mean_ste * 1e6, wall, run.steps);
     assert!((w2 / w2_steady - 1.0).abs() < 5e-3);
     assert!((mean_dte / mean_ste - 1.0).abs() < 0.03);
 }
 
-/// Example 3 on a reduced pair at its own max_step: the DTE's mean and peak-to-peak over the
-/// last whole mesh cycle of gear 2 (every RK4 step recorded).
-fn example_3_dte(m: &PmorModel) -> (f64, f64) {
+/// One run of example 3 (185 N·m after a 5 ms haversine, 20 N·m·s/rad on gear 2, 25 ms) on a
+/// reduced pair at its own max_step.
+struct Example3 {
+    steps: usize,
+    omega2_end: f64,
+    /// The DTE at every RK4 step over the last whole mesh cycle of gear 2 (m).
+    dte_last_cycle: Vec<f64>,
+}
+
+impl Example3 {
+    fn dte_mean_m(&self) -> f64 {
+        self.dte_last_cycle.iter().sum::<f64>() / self.dte_last_cycle.len() as f64
+    }
+
+    fn dte_peak_to_peak_m(&self) -> f64 {
+        let (lo, hi) = self.dte_last_cycle.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        hi - lo
+    }
+}
+
+fn example_3(m: &PmorModel) -> Example3 {
     let place = PairPlacement::new(&m.pair);
     let dynamics = PmorDynamics::new(m, &place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
     let mut s = m.initial_state([0.0, 0.0], [0.0, 0.0]);
     let h = m.max_step_s;
-    let mut record = Vec::new();
-    for k in 0..(25e-3 / h) as usize {
+    let steps = (25e-3 / h) as usize;
+    let mut record = Vec::with_capacity(steps);
+    for k in 0..steps {
         let t = k as f64 * h;
         let tau1 = if t < 5e-3 { 185.0 * 0.5 * (1.0 - (PI * t / 5e-3).cos()) } else { 185.0 };
         let load = -20.0 * s.omega[1];
@@ -255,10 +263,8 @@ fn example_3_dte(m: &PmorModel) -> (f64, f64) {
     }
     let pitch2 = 2.0 * PI / m.pair.gear2.teeth as f64;
     let last = record.last().unwrap().0;
-    let cycle: Vec<f64> = record.iter().filter(|r| r.0 > last - pitch2).map(|r| r.1).collect();
-    let mean = cycle.iter().sum::<f64>() / cycle.len() as f64;
-    let (lo, hi) = cycle.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    (mean, hi - lo)
+    let dte_last_cycle = record.iter().filter(|r| r.0 > last - pitch2).map(|r| r.1).collect();
+    Example3 { steps, omega2_end: s.omega[1], dte_last_cycle }
 }
 
 /// The load-sharing shapes (`rom::sharing`), evidence by convergence in modelling choices that
@@ -280,7 +286,7 @@ fn dte_peak_to_peak_follows_the_load_not_the_rom_torque_with_sharing_shapes() {
             DynamicBuildOptions { rom_torques_nm: vec![torque], sharing_shapes, angles: 40, ..Default::default() };
         build_dynamic_model(&pair, &MeshSpec::default(), &options, |_| {}).unwrap().0
     };
-    let pp = |m: &PmorModel| example_3_dte(m).1;
+    let pp = |m: &PmorModel| example_3(m).dte_peak_to_peak_m();
     let with = [pp(&f.model), pp(&build(185.0, 1))];
     let without = [pp(&build(250.0, 0)), pp(&build(185.0, 0))];
     let change = |v: [f64; 2]| v[1] / v[0] - 1.0;
@@ -329,21 +335,8 @@ fn reversed_torque_rests_on_the_coast_flanks_at_the_mirrored_static_te() {
         let (s, _) = static_equilibrium(&dynamics, theta2_turned, torque, ste[k]).unwrap();
         drive.push(te(m, &s));
     }
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    let p2p = |v: &[f64]| v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min);
     for (name, got) in [("coast (mirrored)", &coast), ("drive (control)", &drive)] {
-        let (mg, ms, pg, ps) = (mean(got), mean(ste), p2p(got), p2p(ste));
-        eprintln!(
-            "{name} at {torque} N·m: mean {:.4} µm vs STE {:.4} µm ({:+.2} %); p-p {:.4} vs {:.4} µm ({:+.2} %)",
-            mg * 1e6,
-            ms * 1e6,
-            (mg / ms - 1.0) * 100.0,
-            pg * 1e6,
-            ps * 1e6,
-            (pg / ps - 1.0) * 100.0
-        );
-        assert!((mg / ms - 1.0).abs() < 0.02, "{name}: mean");
-        assert!((pg / ps - 1.0).abs() < 0.05, "{name}: p-p");
+        assert_reproduces_the_statics(&format!("{name} at {torque} N·m"), got, ste);
     }
 }
 

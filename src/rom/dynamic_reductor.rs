@@ -280,15 +280,21 @@ pub fn build_dynamic_model(
             place.half_turn_angles([0.0, sample])[1]
         }
     };
+    // Gear i's sample s in the half-turned pose, wrapped into gear 2's reference pitch: (the
+    // whole teeth it was wrapped by, θ₂ there).
+    let half_turned_pose = |i: usize, s: usize| -> (i64, f64) {
+        let theta2 = half_turned_theta2(i, s);
+        let wraps = (theta2 / pitch2).floor();
+        (wraps as i64, theta2 - wraps * pitch2)
+    };
     let coast_jobs: Vec<(usize, usize, usize)> = (0..2)
         .flat_map(|i| (0..options.rom_torques_nm.len()).flat_map(move |t| (0..=n_theta).map(move |s| (i, t, s))))
         .collect();
     let coast_cases: Vec<(i64, super::statics::StaticCase)> = coast_jobs
         .par_iter()
         .map(|&(i, t, s)| {
-            let theta2 = half_turned_theta2(i, s);
-            let wraps = (theta2 / pitch2).floor();
-            Ok((wraps as i64, statics.solve(theta2 - wraps * pitch2, options.rom_torques_nm[t])?))
+            let (wraps, theta2) = half_turned_pose(i, s);
+            Ok((wraps, statics.solve(theta2, options.rom_torques_nm[t])?))
         })
         .collect::<Result<Vec<_>, String>>()?;
     // A field of the half-turned pose, wrapped by `wraps` teeth, turned back onto gear i.
@@ -308,9 +314,8 @@ pub fn build_dynamic_model(
         fe[i].reconstructor.displacement(&sharing::sharing_load(&place, &fe[i].reduced, i, theta2, order))
     };
     let coast_sharing_field = |i: usize, s: usize, order: usize, half_turn: &[usize]| -> Vec<f64> {
-        let theta2 = half_turned_theta2(i, s);
-        let wraps = (theta2 / pitch2).floor();
-        turn_back(i, wraps as i64, &sharing_field(i, theta2 - wraps * pitch2, order), half_turn)
+        let (wraps, theta2) = half_turned_pose(i, s);
+        turn_back(i, wraps, &sharing_field(i, theta2, order), half_turn)
     };
     let ste_m: Vec<Vec<f64>> =
         (0..options.rom_torques_nm.len()).map(|t| (0..n_theta).map(|s| case(t, s).ste_m).collect()).collect();
