@@ -382,7 +382,8 @@ pub fn build_dynamic_model(
         // drive and a coast shape load opposite flanks; a sharing shape is never parallel to the
         // static one, `rom::sharing`.)
         for (s_idx, sample) in base.iter().enumerate() {
-            let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_times(&sample[r]), &sample[c]));
+            let m_sample: Vec<Vec<f64>> = sample.iter().map(|f| m_times(f)).collect();
+            let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_sample[r], &sample[c]));
             let eig = nalgebra::SymmetricEigen::new(gram).eigenvalues;
             let ratio = eig.min() / eig.max();
             gram_ratio[i] = gram_ratio[i].min(ratio);
