@@ -1,7 +1,7 @@
 //! The gear pair behind the FMI layer: maps the interface's variables (by name, from
 //! `modelDescription/variables.toml`) to the physics of the model kind the FMU carries (the
-//! lumped model or the PMOR-Hertz reduced pair), and steps it with RK4 sub-steps no longer than
-//! `max_step`. Everything that changes lives in [`GearPairState`], so an FMU state is a copy of it.
+//! lumped model or the PMOR-Hertz reduced pair), and steps it with sub-steps no longer than `max_step`
+//! (RK4; the PMOR-Hertz model's own integrator). Everything that changes lives in [`GearPairState`], so an FMU state is a copy of it.
 
 use super::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
 use super::pmor::model::PmorModel;
@@ -122,7 +122,7 @@ pub struct GearPairFmu {
     pub physics: Physics,
     /// (value reference, variable), from variables.toml.
     lookup: Vec<(u32, Var)>,
-    /// PMOR-Hertz: RK4's stability limit (s) for parameters other than the build's (inertias,
+    /// PMOR-Hertz: the integrator's stability limit (s) for parameters other than the build's (inertias,
     /// mesh damping ratio, as bits), linearized once per set (`check_stability`).
     stability_limits: std::sync::Mutex<Vec<([u64; 3], f64)>>,
 }
@@ -201,38 +201,41 @@ impl GearPairFmu {
 }
 
 impl GearPairFmu {
-    /// The stability contract: max_step must lie within RK4's stability limit of the stiffest
-    /// dynamics the model retains (lumped: the mesh mode at the law's largest tangent stiffness
-    /// with these inertias and this damping; PMOR-Hertz: the pair linearized at 4 × its ROM
-    /// torque, computed offline for the model's own inertias — larger ones only lower it).
+    /// The stability contract: max_step must lie within the integrator's stability limit of the
+    /// stiffest dynamics the model retains (lumped, RK4: the mesh mode at the law's largest
+    /// tangent stiffness with these inertias and this damping; PMOR-Hertz, its model's
+    /// integrator: the pair linearized at 4 × its ROM torque, computed offline for the model's
+    /// own inertias — larger ones only lower it).
     fn check_stability(&self, s: &GearPairState) -> Result<(), String> {
-        let (limit, what) = match &self.physics {
+        let (limit, integrator, what) = match &self.physics {
             Physics::Lumped(mesh) => {
-                (crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params), "the stiffest mesh mode")
+                (crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params), "RK4", "the stiffest mesh mode")
             }
-            Physics::PmorHertz { model, place } => {
-                (self.pmor_rk4_limit(model, place, s)?, "the pair linearized at 4 × its ROM torque")
-            }
+            Physics::PmorHertz { model, place } => (
+                self.pmor_stability_limit(model, place, s)?,
+                model.integrator.name(),
+                "the pair linearized at 4 × its ROM torque",
+            ),
         };
         if s.max_step_s <= limit {
             Ok(())
         } else {
             Err(format!(
-                "max_step = {:e} s exceeds RK4's stability limit {limit:.4e} s on {what} (inertias {:e} / {:e} kg·m², mesh damping ratio {}): lower max_step",
+                "max_step = {:e} s exceeds {integrator}'s stability limit {limit:.4e} s on {what} (inertias {:e} / {:e} kg·m², mesh damping ratio {}): lower max_step",
                 s.max_step_s, s.params.inertia_1_kgm2, s.params.inertia_2_kgm2, s.params.mesh_damping_ratio
             ))
         }
     }
 
-    /// RK4's stability limit of the PMOR-Hertz pair with an instance's parameters: the build's
+    /// The stability limit of the PMOR-Hertz pair with an instance's parameters: the build's
     /// (stored in the model file) when they are the build's own, else the same linearization
     /// with the instance's inertias and shape damping (about 0.3 s, once per parameter set):
     /// a raised damping ratio puts real eigenvalues beyond the default step's reach.
-    fn pmor_rk4_limit(&self, model: &PmorModel, place: &PairPlacement, s: &GearPairState) -> Result<f64, String> {
+    fn pmor_stability_limit(&self, model: &PmorModel, place: &PairPlacement, s: &GearPairState) -> Result<f64, String> {
         let p = &s.params;
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
         if p.mesh_damping_ratio == model.shape_damping_ratio && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
-            return Ok(model.rk4_limit_s);
+            return Ok(model.stability_limit_s);
         }
         let key = [p.inertia_1_kgm2.to_bits(), p.inertia_2_kgm2.to_bits(), p.mesh_damping_ratio.to_bits()];
         let mut cache = self.stability_limits.lock().map_err(|_| "the stability cache is poisoned".to_string())?;
@@ -241,8 +244,8 @@ impl GearPairFmu {
         }
         let torque = crate::dynamics::pmor::linear::STEP_LOAD_FACTOR
             * model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-        let (limit, _) = crate::dynamics::pmor::linear::rk4_limit_under_load(&self.pmor(model, place, s), torque)
-            .map_err(|e| format!("RK4's stability limit with these parameters could not be found: {e}"))?;
+        let (limit, _) = crate::dynamics::pmor::linear::stability_limit_under_load(&self.pmor(model, place, s), torque)
+            .map_err(|e| format!("the stability limit with these parameters could not be found: {e}"))?;
         cache.push((key, limit));
         Ok(limit)
     }
@@ -492,7 +495,7 @@ impl Model for GearPairFmu {
             Ok(())
         } else {
             Err(format!(
-                "communicationStepSize h = {h:e} s with max_step = {max_step_s:e} s needs {n:e} RK4 sub-steps, more than the bound of {bound:e} per call (about 10 s of work); take shorter communication steps or a larger max_step"
+                "communicationStepSize h = {h:e} s with max_step = {max_step_s:e} s needs {n:e} sub-steps, more than the bound of {bound:e} per call (about 10 s of work); take shorter communication steps or a larger max_step"
             ))
         }
     }

@@ -5,17 +5,23 @@
 
 use nalgebra::Complex;
 
+/// Whether RK4's amplification |R(hλ)| stays ≤ 1.
+pub fn rk4_is_stable(lambda: Complex<f64>, h: f64) -> bool {
+    let z = lambda * h;
+    let r = Complex::new(1.0, 0.0) + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0;
+    r.norm() <= 1.0 + 1e-12
+}
+
 /// The largest stable step (s) for the eigenvalues `lambdas` (1/s), by bisection below `upper_s`
 /// (returned if even that is stable). Eigenvalues with a positive real part are not the
 /// integrator's to damp: the caller passes Re λ ≤ 0.
 pub fn largest_stable_step(lambdas: &[Complex<f64>], upper_s: f64) -> f64 {
-    let stable = |h: f64| {
-        lambdas.iter().all(|l| {
-            let z = l * h;
-            let r = Complex::new(1.0, 0.0) + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0;
-            r.norm() <= 1.0 + 1e-12
-        })
-    };
+    bisect_stable_step(|h| lambdas.iter().all(|&l| rk4_is_stable(l, h)), upper_s)
+}
+
+/// The largest h ≤ `upper_s` with `stable(h)`, by bisection (the stable steps of a method on a
+/// set of modes form an interval from 0 for the regions and rays met here).
+pub fn bisect_stable_step(stable: impl Fn(f64) -> bool, upper_s: f64) -> f64 {
     if stable(upper_s) {
         return upper_s;
     }

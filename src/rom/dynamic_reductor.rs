@@ -20,6 +20,7 @@ use super::sharing;
 use super::statics::{ContactModel, StaticModel};
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
+use crate::dynamics::pmor::integrator::Integrator;
 use crate::dynamics::pmor::model::{
     FlankRows, Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
 };
@@ -52,6 +53,8 @@ pub struct DynamicBuildOptions {
     pub interpolation: Interpolation,
     pub modal_damping_ratio: f64,
     pub shape_damping_ratio: f64,
+    /// The time integrator of the FMU (its default step is a share of this one's limit).
+    pub integrator: Integrator,
 }
 
 impl Default for DynamicBuildOptions {
@@ -71,6 +74,9 @@ impl Default for DynamicBuildOptions {
             interpolation: Interpolation::CatmullRom,
             modal_damping_ratio: 0.01,
             shape_damping_ratio: 0.05,
+            // One right-hand side per step against RK4's four, at 0.7 of RK4's limit: example
+            // 3 in a third of the work at the same DTE (BENCHMARKS, "Integrators").
+            integrator: Integrator::Verlet,
         }
     }
 }
@@ -98,7 +104,7 @@ pub struct DynamicBuildReport {
     pub step: IntegratorStep,
 }
 
-/// How the default step was chosen: RK4's stability limit on the linearized pair.
+/// How the default step was chosen: the integrator's stability limit on the linearized pair.
 #[derive(Debug, Clone)]
 pub struct IntegratorStep {
     /// The load of the linearization (N·m on gear 1).
@@ -106,8 +112,9 @@ pub struct IntegratorStep {
     /// Undamped natural frequencies of the linearized pair (Hz), ascending, the rigid rotation
     /// first, at the angle with the shortest limit.
     pub natural_frequencies_hz: Vec<f64>,
-    /// The largest stable RK4 step at that load with the default damping (s).
-    pub rk4_limit_s: f64,
+    pub integrator: Integrator,
+    /// The integrator's largest stable step at that load with the default damping (s).
+    pub stability_limit_s: f64,
     /// The FMU's default step: `STEP_SAFETY` × the limit, rounded down to 0.1 µs.
     pub max_step_s: f64,
 }
@@ -117,23 +124,30 @@ pub struct IntegratorStep {
 /// 1 µs and at 6 µs agree within 0.2 % (BENCHMARKS), so the step is set by stability, not accuracy.
 const STEP_SAFETY: f64 = 0.6;
 
-/// The default RK4 step of a reduced pair: RK4's stability limit on the pair linearized under
-/// `linear::STEP_LOAD_FACTOR` × the largest ROM torque with the default damping
-/// (`linear::rk4_limit_under_load`), and `STEP_SAFETY` of it.
+/// The default step of a reduced pair: the integrator's stability limit on the pair linearized
+/// under `linear::STEP_LOAD_FACTOR` × the largest ROM torque with the default damping
+/// (`linear::stability_limit_under_load`), and `STEP_SAFETY` of it.
 fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<IntegratorStep, String> {
     use crate::contact::mesh_kinematics::PairPlacement;
     use crate::dynamics::pmor::{linear, PmorDynamics};
     let place = PairPlacement::new(&model.pair);
-    let dynamics = PmorDynamics::new(
+    let mut dynamics = PmorDynamics::new(
         model,
         &place,
         model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
         [0.0; 2],
     );
+    dynamics.integrator = options.integrator;
     let torque = linear::STEP_LOAD_FACTOR * options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    let (rk4_limit_s, natural_frequencies_hz) = linear::rk4_limit_under_load(&dynamics, torque)?;
-    let max_step_s = (STEP_SAFETY * rk4_limit_s * 1e7).floor() / 1e7;
-    Ok(IntegratorStep { torque_nm: torque, natural_frequencies_hz, rk4_limit_s, max_step_s })
+    let (stability_limit_s, natural_frequencies_hz) = linear::stability_limit_under_load(&dynamics, torque)?;
+    let max_step_s = (STEP_SAFETY * stability_limit_s * 1e7).floor() / 1e7;
+    Ok(IntegratorStep {
+        torque_nm: torque,
+        natural_frequencies_hz,
+        integrator: options.integrator,
+        stability_limit_s,
+        max_step_s,
+    })
 }
 
 /// The one-tooth rotation P of a nodal field (all nodes, 3 per node) of the structured gear
@@ -538,8 +552,9 @@ pub fn build_dynamic_model(
         interpolation: options.interpolation,
         modal_damping_ratio: options.modal_damping_ratio,
         shape_damping_ratio: options.shape_damping_ratio,
+        integrator: options.integrator,
         max_step_s: 0.0,
-        rk4_limit_s: 0.0,
+        stability_limit_s: 0.0,
         info: PmorBuildInfo {
             rom_torques_nm: options.rom_torques_nm.clone(),
             sharing_shapes: options.sharing_shapes,
@@ -552,7 +567,7 @@ pub fn build_dynamic_model(
     progress("linearizing the pair for the integrator step".into());
     let step = integrator_step(&model, options)?;
     model.max_step_s = step.max_step_s;
-    model.rk4_limit_s = step.rk4_limit_s;
+    model.stability_limit_s = step.stability_limit_s;
     let report = DynamicBuildReport {
         step,
         modes_hz: report_modes.try_into().map_err(|_| "two gears")?,

@@ -86,7 +86,7 @@ def test_a_step_needing_unbounded_work_is_refused_at_once(fmi_case, make_slave, 
         _refused(lambda: slave.step(t, h), fmi2Error)
         assert time.perf_counter() - started < 0.5, "refused before any work"
         _assert_logged(log_capture, name, since, fmi2Error, "fmi2DoStep", "communicationStepSize h = ",
-                       "with max_step = ", "RK4 sub-steps, more than the bound of", "per call")
+                       "with max_step = ", "sub-steps, more than the bound of", "per call")
         slave.fmu.setFMUstate(saved)
         t_after = _drive(slave, t, 2)  # usable again from the saved state
         assert t_after > t

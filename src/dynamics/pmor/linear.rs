@@ -8,14 +8,15 @@
 //!   the right-hand side (the same code the integrator runs, so the linear model is the one the
 //!   time runs see), with its blocks ∂q̈/∂q (stiffness) and ∂q̈/∂q̇ (damping, gyroscopic).
 //! - [`LinearizedPair::natural_frequencies_hz`]: √(eigenvalues of −∂q̈/∂q), the undamped spectrum;
-//!   [`LinearizedPair::rk4_stability_limit_s`]: the largest step whose hλ stay inside RK4's
-//!   stability region for every eigenvalue λ of the flow.
+//!   [`LinearizedPair::stability_limit_s`]: the largest step an integrator keeps stable for
+//!   every eigenvalue λ of the flow.
 
+use super::integrator::Integrator;
 use super::{PmorDynamics, PmorState};
 use nalgebra::{Complex, DMatrix, DVector};
 
 /// The load of the step-limit linearization as a multiple of the largest ROM torque
-/// (`rk4_limit_under_load`): the stiffest mode is the Hertz contact's, which stiffens (slowly,
+/// (`stability_limit_under_load`): the stiffest mode is the Hertz contact's, which stiffens (slowly,
 /// logarithmically) with load; at 4× the limit is 11 % shorter than at the ROM load on the
 /// default spur pair.
 pub const STEP_LOAD_FACTOR: f64 = 4.0;
@@ -133,10 +134,9 @@ impl LinearizedPair {
         self.flow.complex_eigenvalues().iter().copied().collect()
     }
 
-    /// The largest step h with |R(hλ)| ≤ 1 for every eigenvalue λ of the flow, R the RK4
-    /// amplification factor 1 + z + z²/2 + z³/6 + z⁴/24 (bisection; the region is star-shaped
-    /// along each ray out to its boundary for the rays that matter here).
-    pub fn rk4_stability_limit_s(&self) -> f64 {
+    /// The largest step `integrator` keeps stable for every eigenvalue λ of the flow
+    /// (`Integrator::largest_stable_step`).
+    pub fn stability_limit_s(&self, integrator: Integrator) -> f64 {
         // The rigid rotation's near-zero eigenvalues never limit the step; the differences leave
         // the undamped pairs a real part of round-off size, either sign: a step is judged on
         // the oscillation, Re λ clamped to ≤ 0.
@@ -146,17 +146,17 @@ impl LinearizedPair {
             .filter(|l| l.norm() > 1e2)
             .map(|l| Complex::new(l.re.min(0.0), l.im))
             .collect();
-        crate::dynamics::rk4_stability::largest_stable_step(&lambdas, 1e-3)
+        integrator.largest_stable_step(&lambdas, 1e-3)
     }
 }
 
-/// RK4's stability limit (s) on the pair as `dynamics` has it (inertias, damping), linearized at
-/// its static equilibrium under `torque_nm` on gear 1 at four angles over gear 2's pitch (single
-/// and double contact), the shortest; with the undamped natural frequencies (Hz) there. The
+/// The stability limit (s) of `dynamics.integrator` on the pair as `dynamics` has it (inertias,
+/// damping), linearized at its static equilibrium under `torque_nm` on gear 1 at four angles
+/// over gear 2's pitch (single and double contact), the shortest; with the undamped natural frequencies (Hz) there. The
 /// Newton starts at a tenth of the STE a mesh stiffness of 10 N/(mm·µm) would give: with η = 0
 /// the whole approach sits in the Hertz contact, so the iterates come from the light side and
 /// stay inside the contact law's range (b ≤ h/4).
-pub fn rk4_limit_under_load(dynamics: &PmorDynamics, torque_nm: f64) -> Result<(f64, Vec<f64>), String> {
+pub fn stability_limit_under_load(dynamics: &PmorDynamics, torque_nm: f64) -> Result<(f64, Vec<f64>), String> {
     let model = dynamics.model;
     let guess = torque_nm / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
     let mut shortest: Option<(f64, Vec<f64>)> = None;
@@ -164,7 +164,7 @@ pub fn rk4_limit_under_load(dynamics: &PmorDynamics, torque_nm: f64) -> Result<(
         let theta2 = (quarter as f64 + 0.5) / 4.0 * model.gears[1].pitch_rad();
         let (state, torque2) = static_equilibrium(dynamics, theta2, torque_nm, guess)?;
         let lin = linearize(dynamics, &state, [torque_nm, torque2])?;
-        let limit = lin.rk4_stability_limit_s();
+        let limit = lin.stability_limit_s(dynamics.integrator);
         if shortest.as_ref().map_or(true, |s| limit < s.0) {
             shortest = Some((limit, lin.natural_frequencies_hz()));
         }

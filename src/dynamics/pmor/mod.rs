@@ -1,14 +1,15 @@
 //! The PMOR-Hertz gear pair in floating frames (paper Sects. 3 and 5.2, design §4.5): per gear
 //! the shaft angle θ and elastic coordinates η = (η_Φ, η_Ψ) on the basis [Φ, Ψ(ϑ)], Hertz contact
-//! between the deformed flanks, integrated by RK4 at a fixed sub-step.
+//! between the deformed flanks, integrated at a fixed sub-step (velocity Verlet or RK4).
 //!
 //! - [`model`]: the reduced pair as plain data (the model file's content);
 //! - [`interpolation`]: Ψ(ϑ) between the angular samples;
 //! - [`equations`]: one gear's Lagrangian terms (mass matrix, quadratic velocity vector, elastic
 //!   and damping forces);
 //! - [`contact`]: the contact search, Hertz law and band on the deformed flanks;
-//! - [`linear`]: static equilibrium, linearization, natural frequencies, RK4's step limit;
-//! - this file: the state, the pitch anchors, the right-hand side and the integrator.
+//! - [`linear`]: static equilibrium, linearization, natural frequencies, the step limit;
+//! - [`integrator`]: RK4 and velocity Verlet, and the stability limit of each;
+//! - this file: the state, the pitch anchors, the right-hand side and the RK4 step.
 //!
 //! The pitch anchor kᵢ of each gear is part of the state: the stored shapes cover the reference
 //! pitch ϑ ∈ [−Δϑ, pitch + Δϑ), and after every step whose end leaves [0, pitch) the anchor moves
@@ -17,6 +18,7 @@
 
 pub mod contact;
 pub mod equations;
+pub mod integrator;
 pub mod interpolation;
 pub mod linear;
 pub mod model;
@@ -24,6 +26,7 @@ pub mod model;
 use crate::contact::mesh_kinematics::PairPlacement;
 use contact::{contact_loads, ContactLoads, GearPose, Loading};
 use equations::{gear_terms, Damping, Stencil};
+use integrator::Integrator;
 use model::PmorModel;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -68,6 +71,8 @@ pub struct PmorDynamics<'a> {
     pub added_inertia_kgm2: [f64; 2],
     /// How the contact force enters the elastic coordinates (the Hertz band by default).
     pub loading: Loading,
+    /// The time integrator (the model's choice by default).
+    pub integrator: Integrator,
     /// The Gram matrix N of the interval last used, per gear (it changes only at samples).
     gram_cache: [RefCell<Option<(usize, Rc<DMatrix<f64>>)>>; 2],
 }
@@ -132,6 +137,7 @@ impl<'a> PmorDynamics<'a> {
             damping,
             added_inertia_kgm2,
             loading: Loading::HertzBand,
+            integrator: model.integrator,
             gram_cache: Default::default(),
         }
     }
@@ -241,7 +247,7 @@ impl<'a> PmorDynamics<'a> {
     }
 
     /// One RK4 step of length h with the torques held, then the anchors re-set.
-    pub fn step(&self, s: &mut PmorState, torques: [f64; 2], h: f64) -> Result<(), String> {
+    pub fn rk4_step(&self, s: &mut PmorState, torques: [f64; 2], h: f64) -> Result<(), String> {
         let y = self.pack(s);
         let a = s.anchor;
         let stage = |y: &[f64], k: &[f64], f: f64| -> Vec<f64> { y.iter().zip(k).map(|(a, b)| a + f * b).collect() };
@@ -279,12 +285,26 @@ impl<'a> PmorDynamics<'a> {
         }
     }
 
-    /// Advances by `duration` in RK4 steps no longer than `max_step`.
+    /// Advances by `duration` in steps of `self.integrator` no longer than `max_step`.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
+        match self.integrator {
+            Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
+            Integrator::Verlet => self.verlet_advance(s, torques, duration, max_step),
+        }
+    }
+
+    /// Advances by `duration` in RK4 steps no longer than `max_step`.
+    pub fn rk4_advance(
+        &self,
+        s: &mut PmorState,
+        torques: [f64; 2],
+        duration: f64,
+        max_step: f64,
+    ) -> Result<(), String> {
         let n = (duration / max_step).ceil().max(1.0) as usize;
         let h = duration / n as f64;
         for _ in 0..n {
-            self.step(s, torques, h)?;
+            self.rk4_step(s, torques, h)?;
         }
         Ok(())
     }

@@ -16,6 +16,7 @@
 
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::Flank;
+use crate::dynamics::pmor::integrator::Integrator;
 use crate::gear::GearPair;
 use crate::rom::flank::FlankGrid;
 use nalgebra::{DMatrix, DVector};
@@ -159,12 +160,14 @@ pub struct PmorModel {
     /// values, 1 % and 5 %, taken at each coordinate's own frequency: `equations::Damping`).
     pub modal_damping_ratio: f64,
     pub shape_damping_ratio: f64,
-    /// The internal RK4 step bound the FMU starts with (s): a fraction of RK4's stability limit
-    /// on the pair linearized at a load above its range (`rom::dynamic_reductor`), so the step
-    /// follows the stiffest mode of this model instead of a constant.
+    /// The time integrator the FMU steps with (`integrator`).
+    pub integrator: Integrator,
+    /// The internal step bound the FMU starts with (s): a fraction of the integrator's stability
+    /// limit on the pair linearized at a load above its range (`rom::dynamic_reductor`), so the
+    /// step follows the stiffest mode of this model instead of a constant.
     pub max_step_s: f64,
-    /// RK4's stability limit of that linearization (s): the FMU refuses a max_step above it at
-    /// ExitInitializationMode (issue 13's stability contract).
-    pub rk4_limit_s: f64,
+    /// The integrator's stability limit on that linearization (s): the FMU refuses a max_step
+    /// above it at ExitInitializationMode (issue 13's stability contract).
+    pub stability_limit_s: f64,
     pub info: PmorBuildInfo,
 }
