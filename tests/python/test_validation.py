@@ -45,8 +45,8 @@ def test_model_description_matches_contract(fmi_case):
         assert variables[name].type == type_, name
     for name in ("tau_1", "tau_2"):
         assert float(variables[name].start) == 0.0
-    # Per model kind: the lumped RK4 bound; the PMOR-Hertz model's own, 0.6 × RK4's stability
-    # limit of the linearized pair (Rust test `pmor_dynamics`; 3.7 µs for the default spur pair),
+    # Per model kind: the lumped RK4 bound; the PMOR-Hertz model's own, 0.6 × its integrator's
+    # stability limit on the linearized pair (RK4: 2.8 µs for the default spur pair),
     # so only its order is fixed here: microseconds, against the 57 kHz hub mode.
     if fmi_case.kind == "lumped":
         assert float(variables["max_step"].start) == pytest.approx(1e-5)
