@@ -46,12 +46,11 @@ fn main() {
         model.damping(model.modal_damping_ratio, model.shape_damping_ratio),
         [0.0; 2],
     );
-    // The integrators side by side, each at 0.6 of its own stability limit (the build's rule).
-    let torque = linear::STEP_LOAD_FACTOR * model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    // The integrators side by side, each at its own default step (the build's rule).
     let at = |integrator: Integrator| {
         let mut d = PmorDynamics::new(&model, &place, dynamics.damping, [0.0; 2]);
         d.integrator = integrator;
-        let step = (0.6 * linear::stability_limit_under_load(&d, torque).unwrap().0 * 1e7).floor() / 1e7;
+        let step = linear::default_step(&d).unwrap().max_step_s;
         (d, step)
     };
     let ((dynamics, verlet_max_step), (rk4, rk4_max_step)) = (at(Integrator::Verlet), at(Integrator::Rk4));

@@ -490,8 +490,7 @@ fn velocity_verlet_keeps_the_energy_at_the_default_step() {
     let m = &f.model;
     let mut verlet = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
     verlet.integrator = Integrator::Verlet;
-    let torque = linear::STEP_LOAD_FACTOR * m.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    let h = (0.6 * linear::stability_limit_under_load(&verlet, torque).unwrap().0 * 1e7).floor() / 1e7;
+    let h = linear::default_step(&verlet).unwrap().max_step_s;
     let (drift, vib, e0, anchors) = undamped_energy_drift(m, &f.place, h, Loading::Point, Integrator::Verlet);
     let (drift_half, _, _, _) = undamped_energy_drift(m, &f.place, 0.5 * h, Loading::Point, Integrator::Verlet);
     eprintln!(

@@ -242,10 +242,9 @@ impl GearPairFmu {
         if let Some(&(_, limit)) = cache.iter().find(|(k, _)| *k == key) {
             return Ok(limit);
         }
-        let torque = crate::dynamics::pmor::linear::STEP_LOAD_FACTOR
-            * model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-        let (limit, _) = crate::dynamics::pmor::linear::stability_limit_under_load(&self.pmor(model, place, s), torque)
-            .map_err(|e| format!("the stability limit with these parameters could not be found: {e}"))?;
+        let limit = crate::dynamics::pmor::linear::default_step(&self.pmor(model, place, s))
+            .map_err(|e| format!("the stability limit with these parameters could not be found: {e}"))?
+            .stability_limit_s;
         cache.push((key, limit));
         Ok(limit)
     }

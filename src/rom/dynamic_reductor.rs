@@ -21,6 +21,7 @@ use super::statics::{ContactModel, StaticModel};
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 use crate::dynamics::pmor::integrator::Integrator;
+pub use crate::dynamics::pmor::linear::IntegratorStep;
 use crate::dynamics::pmor::model::{
     FlankRows, Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
 };
@@ -106,29 +107,8 @@ pub struct DynamicBuildReport {
     pub step: IntegratorStep,
 }
 
-/// How the default step was chosen: the integrator's stability limit on the linearized pair.
-#[derive(Debug, Clone)]
-pub struct IntegratorStep {
-    /// The load of the linearization (N·m on gear 1).
-    pub torque_nm: f64,
-    /// Undamped natural frequencies of the linearized pair (Hz), ascending, the rigid rotation
-    /// first, at the angle with the shortest limit.
-    pub natural_frequencies_hz: Vec<f64>,
-    pub integrator: Integrator,
-    /// The integrator's largest stable step at that load with the default damping (s).
-    pub stability_limit_s: f64,
-    /// The FMU's default step: `STEP_SAFETY` × the limit, rounded down to 0.1 µs.
-    pub max_step_s: f64,
-}
-
-/// Fraction of the stability limit taken as the default step: room for the transient loads of
-/// impacts and re-engagement and for a user's larger damping ratios. On example 3 the DTE at
-/// 1 µs and at 6 µs agree within 0.2 % (BENCHMARKS), so the step is set by stability, not accuracy.
-const STEP_SAFETY: f64 = 0.6;
-
-/// The default step of a reduced pair: the integrator's stability limit on the pair linearized
-/// under `linear::STEP_LOAD_FACTOR` × the largest ROM torque with the default damping
-/// (`linear::stability_limit_under_load`), and `STEP_SAFETY` of it.
+/// The default step of a reduced pair with the build's damping and integrator
+/// (`linear::default_step`).
 fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<IntegratorStep, String> {
     use crate::contact::mesh_kinematics::PairPlacement;
     use crate::dynamics::pmor::{linear, PmorDynamics};
@@ -140,16 +120,7 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
         [0.0; 2],
     );
     dynamics.integrator = options.integrator;
-    let torque = linear::STEP_LOAD_FACTOR * options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    let (stability_limit_s, natural_frequencies_hz) = linear::stability_limit_under_load(&dynamics, torque)?;
-    let max_step_s = (STEP_SAFETY * stability_limit_s * 1e7).floor() / 1e7;
-    Ok(IntegratorStep {
-        torque_nm: torque,
-        natural_frequencies_hz,
-        integrator: options.integrator,
-        stability_limit_s,
-        max_step_s,
-    })
+    linear::default_step(&dynamics)
 }
 
 /// The one-tooth rotation P of a nodal field (all nodes, 3 per node) of the structured gear

@@ -37,14 +37,6 @@ impl Integrator {
         }
     }
 
-    /// Right-hand sides per step.
-    pub fn evaluations_per_step(self) -> usize {
-        match self {
-            Integrator::Rk4 => 4,
-            Integrator::Verlet => 1,
-        }
-    }
-
     /// Whether a step h keeps the mode(s) of eigenvalue λ bounded (|amplification| ≤ 1).
     pub fn is_stable(self, lambda: Complex<f64>, h: f64) -> bool {
         match self {
@@ -66,23 +58,17 @@ impl Integrator {
 ///
 /// A complex pair λ, λ̄ is the mode ẍ = αx + βẋ with α = −|λ|², β = 2 Re λ (the roots of
 /// λ² = α + βλ). As `verlet_advance` runs it, a step starts from the acceleration the previous
-/// one ended with, taken at that step's predicted velocity v*, so the map acts on (x, v, v*); it
-/// is built by applying the step to the unit vectors. A real eigenvalue is taken as a pure decay
-/// v̇ = λv. Exact where the damping is modal; `LinearizedPair::verlet_stability_limit_s` builds
-/// the same map on the whole flow.
+/// one ended with, taken at that step's predicted velocity v*, so the map acts on (x, v, v*). A
+/// real eigenvalue is taken as a pure decay
+/// v̇ = λv. The map is `LinearizedPair::verlet_map` of that one mode (the whole flow's limit,
+/// `verlet_stability_limit_s`, uses it on all modes at once); exact where the damping is modal.
 fn verlet_spectral_radius(lambda: Complex<f64>, h: f64) -> f64 {
     let (alpha, beta) = if lambda.im == 0.0 { (0.0, lambda.re) } else { (-lambda.norm_sqr(), 2.0 * lambda.re) };
-    let step = |x: f64, v: f64, v_pred: f64| -> [f64; 3] {
-        let a = alpha * x + beta * v_pred;
-        let v_half = v + 0.5 * h * a;
-        let x_next = x + h * v_half;
-        let v_pred_next = v + h * a;
-        let a_next = alpha * x_next + beta * v_pred_next;
-        [x_next, v_half + 0.5 * h * a_next, v_pred_next]
+    let mode = super::linear::LinearizedPair {
+        flow: nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, alpha, beta]),
+        coordinates: 1,
     };
-    let columns = [step(1.0, 0.0, 0.0), step(0.0, 1.0, 0.0), step(0.0, 0.0, 1.0)];
-    let map = nalgebra::Matrix3::from_fn(|r, c| columns[c][r]);
-    map.complex_eigenvalues().iter().map(|mu| mu.norm()).fold(0.0, f64::max)
+    mode.verlet_map(h).complex_eigenvalues().iter().map(|mu| mu.norm()).fold(0.0, f64::max)
 }
 
 impl<'a> PmorDynamics<'a> {
@@ -94,8 +80,7 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
     ) -> Result<(), String> {
-        let n = (duration / max_step).ceil().max(1.0) as usize;
-        let h = duration / n as f64;
+        let (n, h) = super::substeps(duration, max_step);
         let mut y = self.pack(s);
         let mut dy = self.rhs(&y, s.anchor, torques)?.0;
         let len = y.len();

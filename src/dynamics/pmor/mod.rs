@@ -301,13 +301,18 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
     ) -> Result<(), String> {
-        let n = (duration / max_step).ceil().max(1.0) as usize;
-        let h = duration / n as f64;
+        let (n, h) = substeps(duration, max_step);
         for _ in 0..n {
             self.rk4_step(s, torques, h)?;
         }
         Ok(())
     }
+}
+
+/// `duration` split into the fewest equal sub-steps no longer than `max_step`: (count, length).
+fn substeps(duration: f64, max_step: f64) -> (usize, f64) {
+    let n = (duration / max_step).ceil().max(1.0) as usize;
+    (n, duration / n as f64)
 }
 
 /// Solves M a = f for the symmetric positive definite mass matrix.
