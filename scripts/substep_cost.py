@@ -1,4 +1,4 @@
-"""µs per RK4 sub-step of each FMU, measured through fmi2DoStep (issue 13: the per-call bound).
+"""µs per integrator sub-step (RK4 or velocity Verlet) of each FMU, measured through fmi2DoStep (issue 13: the per-call bound).
 
 Usage: .venv/bin/python scripts/substep_cost.py out/KurokawaSpur.fmu out/KurokawaSpurPmor.fmu
 Each FMU: 185 N·m on gear 1 against its static load on gear 2, five calls of h = 10⁴·max_step.

@@ -960,9 +960,9 @@ fn pmor_resources() -> &'static (PathBuf, String) {
     })
 }
 
-/// Soak of the PMOR-Hertz FMU (issue 13, item 4, for the model that landed later): 1.16·10⁶ RK4
-/// sub-steps (32 200 communication steps of 0.1 ms at the model's own max_step, 2.8 µs; 3.2 s
-/// of simulated time) through the five regimes of the lumped soak, 23 cycles of drive (40 ms,
+/// Soak of the PMOR-Hertz FMU (issue 13, item 4, for the model that landed later): 2.3·10⁶
+/// velocity Verlet sub-steps (32 200 communication steps of 0.1 ms at the model's own max_step,
+/// 1.4 µs; 3.2 s of simulated time) through the five regimes of the lumped soak, 23 cycles of drive (40 ms,
 /// 185 N·m on gear 1, a viscous load of 20 N·m·s/rad on gear 2), brake (20 ms, −60 N·m: the
 /// coast flanks carry it, across the backlash), free flight (20 ms, no torque), rattle (20 ms,
 /// ±25 N·m at 37 Hz, a light load) and drive again (40 ms). Checked, independently of the FMU's
@@ -972,7 +972,10 @@ fn pmor_resources() -> &'static (PathBuf, String) {
 /// dissipated energy never decreases; both flanks carried load; no drift: ω₂ averaged over the
 /// last 10 ms of every drive phase equals the closed form within 2e-3 (the viscous coupling is
 /// explicit over 0.1 ms), and the later cycles' mean the earlier ones' within the scatter.
-/// `PMOR_SOAK_CYCLES` sets the cycles (199 for 10⁷ sub-steps at 2.8 µs).
+/// `PMOR_SOAK_CYCLES` sets the cycles (100 for 10⁷ sub-steps at 1.4 µs). The balance is the
+/// check on the integrator's bookkeeping: velocity Verlet books the damping's and the torques'
+/// work on its own displacement (the dissipation power at its predicted velocity created up to
+/// 3 % of the energy in play at rattle impacts).
 #[test]
 fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     use gearfmu::contact::mesh_kinematics::PairPlacement;
@@ -1084,7 +1087,7 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     let sub_steps = (step as f64 * (h / max_step).ceil()) as u64;
     let wall = started.elapsed().as_secs_f64();
     println!(
-        "PMOR-Hertz soak: {step} steps ({sub_steps} RK4 sub-steps at {:.1} µs) in {wall:.1} s, {:.0} steps/s; worst \
+        "PMOR-Hertz soak: {step} steps ({sub_steps} sub-steps at {:.1} µs) in {wall:.1} s, {:.0} steps/s; worst \
          energy-balance residual {worst_created:.2e} created, {worst_lost:.2e} lost, of the energy in play; dissipated \
          {last_dissipated:.3e} J; steps on drive / coast flanks {flanks:?}; ω₂ drift / scatter over the cycles {:.1e} / {:.1e}",
         max_step * 1e6,
@@ -1100,8 +1103,9 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
 /// instead of the build's 5 %) puts eigenvalues near the negative real axis whose limit lies
 /// below the default max_step (measured with `linear::stability_limit_under_load` at 4 × the ROM
 /// torque; RK4, before the load-sharing shapes: 5.4 µs at 5 %, 3.5 µs at 50 %, 1.5 µs at 99 %,
-/// and 0.73 µs at 90 % with them against its default step of 2.8 µs; velocity Verlet, whose
-/// lagged predicted velocity makes heavy damping costly, 0.255 µs at 90 % against 1.7 µs):
+/// and 0.73 µs at 90 % with them against its default step of 2.8 µs; velocity Verlet, the
+/// default, whose lagged predicted velocity makes heavy damping costly, 0.255 µs at 90 %
+/// against its default 1.4 µs):
 /// ExitInitializationMode refuses it with the limit in the log line (linearized again with the
 /// instance's damping), and accepts it with max_step below that limit, where the pair then
 /// steps under load. The build's own parameters keep the stored limit.
@@ -1121,11 +1125,12 @@ fn pmor_hertz_raised_damping_is_checked_against_its_own_step_limit() {
     };
     let (c, status) = setup("pmor-damped", None);
     assert_eq!(status, ERR, "the default step with 90 % shape damping must be refused");
-    assert_logged("pmor-damped", "exceeds RK4's stability limit");
+    assert_logged("pmor-damped", "exceeds velocity Verlet's stability limit");
     assert_logged("pmor-damped", "mesh damping ratio 0.9");
     fmi2FreeInstance(c);
     // The limit from the log line; the instance accepts a step below it.
-    let line = logs("pmor-damped").into_iter().find(|l| l.contains("exceeds RK4's stability limit")).unwrap();
+    let line =
+        logs("pmor-damped").into_iter().find(|l| l.contains("exceeds velocity Verlet's stability limit")).unwrap();
     let limit: f64 = line.split("stability limit ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
     let (c, status) = setup("pmor-damped-small-step", Some(0.9 * limit));
     assert_eq!(status, OK, "{:?}", logs("pmor-damped-small-step"));
@@ -1134,5 +1139,5 @@ fn pmor_hertz_raised_damping_is_checked_against_its_own_step_limit() {
         assert_eq!(fmi2DoStep(c, k as f64 * 1e-4, 1e-4, 1), OK, "{:?}", logs("pmor-damped-small-step").last());
     }
     fmi2FreeInstance(c);
-    println!("PMOR-Hertz RK4 limit with 90 % shape damping: {:.3} µs", limit * 1e6);
+    println!("PMOR-Hertz velocity Verlet limit with 90 % shape damping: {:.3} µs", limit * 1e6);
 }

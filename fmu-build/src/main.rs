@@ -70,7 +70,7 @@ struct RomOptions {
     #[arg(long, value_enum, default_value = "catmull-rom")]
     interpolation: InterpolationChoice,
     /// The FMU's time integrator (its default max_step is 0.6 of this one's stability limit).
-    #[arg(long, value_enum, default_value = "rk4")]
+    #[arg(long, value_enum, default_value = "verlet")]
     integrator: IntegratorChoice,
 }
 

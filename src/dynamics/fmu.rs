@@ -280,14 +280,16 @@ impl GearPairFmu {
     }
 }
 
-/// The most RK4 sub-steps one fmi2DoStep may take, per model kind: about 10 s of work per call
+/// The most integrator sub-steps one fmi2DoStep may take, per model kind: at most about 10 s of work per call
 /// on the development machine (2 cores shared, load ≈ 3), measured through the FMU (fmpy,
 /// `fmi2DoStep` with h = 10⁴·max_step, Kurokawa spur pair, 185 N·m against its static load,
 /// five calls each: `scripts/substep_cost.py`):
 /// - lumped: 0.22 µs per sub-step (0.217–0.236) → 4·10⁷ sub-steps ≈ 9 s (h ≤ 400 s at the
 ///   default max_step 1e-5 s);
-/// - PMOR-Hertz: 104 µs per sub-step (103–108) → 10⁵ sub-steps ≈ 10 s (h ≤ 0.36 s at the spur
-///   model's max_step 3.6e-6 s).
+/// - PMOR-Hertz: velocity Verlet, the default, 34 µs per sub-step (34.1–34.6) → 10⁵ sub-steps
+///   ≈ 3.4 s (h ≤ 0.14 s at the spur model's max_step 1.4e-6 s); RK4 (`--integrator rk4`)
+///   141 µs (139–142, with the load-sharing shapes; 104 µs before them, which set the bound)
+///   → 14 s (h ≤ 0.28 s at 2.8e-6 s).
 ///
 /// A longer communication step is refused before any work, naming h, max_step and the bound.
 pub const MAX_SUBSTEPS_LUMPED: f64 = 4e7;

@@ -46,7 +46,7 @@ def test_model_description_matches_contract(fmi_case):
     for name in ("tau_1", "tau_2"):
         assert float(variables[name].start) == 0.0
     # Per model kind: the lumped RK4 bound; the PMOR-Hertz model's own, 0.6 × its integrator's
-    # stability limit on the linearized pair (RK4: 2.8 µs for the default spur pair),
+    # stability limit on the linearized pair (velocity Verlet: 1.4 µs for the default spur pair),
     # so only its order is fixed here: microseconds, against the 57 kHz hub mode.
     if fmi_case.kind == "lumped":
         assert float(variables["max_step"].start) == pytest.approx(1e-5)

@@ -106,6 +106,9 @@ pub struct GearTerms {
     pub elastic_j: f64,
     /// η̇ᵀDη̇ (W).
     pub dissipation_w: f64,
+    /// The damping force Dq̇ over (θ, η) (zero on θ): integrators that book the dissipation as
+    /// the work of this force on their own displacement need it.
+    pub damping_force: DVector<f64>,
 }
 
 /// Modal damping as a fraction of critical at each coordinate's own frequency: on Φ,
@@ -318,11 +321,13 @@ pub fn gear_terms(
     let mut elastic = 0.5 * psi.dot(&k_eta);
     force[0] -= 0.5 * psi.dot(&(&dk_psi * &psi));
     let mut dissipation = 0.0;
+    let mut damping_force = DVector::<f64>::zeros(n_q);
     for j in 0..n_k {
         let lam = gear.eigenvalues[j];
         elastic += 0.5 * lam * eta_phi[j] * eta_phi[j];
         let damp = 2.0 * damping.modes_ratio * lam.sqrt() * etad_phi[j];
         force[1 + j] -= lam * eta_phi[j] + damp;
+        damping_force[1 + j] = damp;
         dissipation += damp * etad_phi[j];
     }
     let damp_psi = if damping.shapes_ratio > 0.0 {
@@ -336,7 +341,8 @@ pub fn gear_terms(
     };
     for m in 0..n_t {
         force[1 + n_k + m] -= k_eta[m] + damp_psi[m];
+        damping_force[1 + n_k + m] = damp_psi[m];
     }
     dissipation += psid.dot(&damp_psi);
-    GearTerms { mass, force, kinetic_j: kinetic, elastic_j: elastic, dissipation_w: dissipation }
+    GearTerms { mass, force, kinetic_j: kinetic, elastic_j: elastic, dissipation_w: dissipation, damping_force }
 }

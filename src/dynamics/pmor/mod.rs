@@ -54,6 +54,8 @@ pub struct PmorOutputs {
     pub elastic_j: f64,
     pub contact_j: f64,
     pub contact: ContactLoads,
+    /// The damping force Dq̇ over both gears' (θ, η), laid out as the coordinates of y.
+    pub damping_force: Vec<f64>,
 }
 
 impl PmorOutputs {
@@ -208,7 +210,7 @@ impl<'a> PmorDynamics<'a> {
         let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
         let contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage, self.loading)?;
         let mut dy = vec![0.0; y.len()];
-        let mut out = PmorOutputs::default();
+        let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
         let mut dissipation = 0.0;
         for i in 0..2 {
             let n = l.n_q[i];
@@ -232,6 +234,7 @@ impl<'a> PmorDynamics<'a> {
             out.kinetic_j += terms.kinetic_j;
             out.elastic_j += terms.elastic_j;
             dissipation += terms.dissipation_w;
+            out.damping_force[l.q(i)..l.q(i) + n].copy_from_slice(terms.damping_force.as_slice());
         }
         let n = y.len();
         dy[n - 2] = torques[0] * y[l.v(0)] + torques[1] * y[l.v(1)];
