@@ -9,8 +9,10 @@ cd "$(dirname "$0")/.."
 out=${1:-out/convergence}
 mkdir -p "$out"
 spec=examples/kurokawa_spur.toml
+only=${ROWS:-.}  # ROWS=regex runs only the rows whose name matches
 row() {  # name, build options…, then "--" and example3 options
   local name=$1; shift
+  [[ "$name" =~ $only ]] || return 0
   local build=() run=()
   while [ $# -gt 0 ] && [ "$1" != "--" ]; do build+=("$1"); shift; done
   [ $# -gt 0 ] && shift
@@ -35,6 +37,12 @@ row torque185 --rom-torques-nm 185
 row sharing0 --sharing-shapes 0
 row sharing0_torque185 --sharing-shapes 0 --rom-torques-nm 185
 row fine_mesh --across 6 --profile 12 --rim 6
+row mesh_4_8_4 --across 4 --profile 8 --rim 4
+row mesh_8_8_8 --across 8 --profile 8 --rim 8
+row mesh_10_8_10 --across 10 --profile 8 --rim 10
+row mesh_8_16_8 --across 8 --profile 16 --rim 8
+row mesh_10_20_10 --across 10 --profile 20 --rim 10
+row mesh_12_24_12 --across 12 --profile 24 --rim 12
 
 row step4us -- --max-step 4e-6
 row step1us -- --max-step 1e-6

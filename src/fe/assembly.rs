@@ -192,6 +192,11 @@ impl Cholesky {
         Ok(Cholesky { symbolic, values, n: k.nrows() })
     }
 
+    /// The fill-reducing ordering of the factor (None: identity).
+    pub fn ordering(&self) -> Option<PermRef<'_, usize>> {
+        self.symbolic.perm()
+    }
+
     /// Non-zeros of the factor L.
     pub fn factor_nnz(&self) -> usize {
         self.symbolic.len_val()
