@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the example FMU of the default pair (Kurokawa spur) with the PMOR-Hertz model — the FE
-# gears reduced offline on a 10/10/10 mesh, ~60 s — and runs the 1-D drivetrain demo with it: motor → shaft →
+# gears reduced offline on a 10/10/10 mesh, ~45 s — and runs the 1-D drivetrain demo with it: motor → shaft →
 # gear-pair FMU → shaft → load, co-simulated with fmpy (out/drivetrain.png). Then example 3 of
 # the paper with the PMOR-Hertz and the lumped FMU side by side (out/example3_dte.png).
 set -euo pipefail

@@ -494,17 +494,11 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
     })
     .map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
+    // Start times, not durations: the two gears' first stages run side by side.
     let stages = stages.into_inner().unwrap();
-    let end = std::time::Instant::now();
-    let timings: Vec<String> = stages
-        .iter()
-        .enumerate()
-        .map(|(k, (name, at))| {
-            let next = stages.get(k + 1).map_or(end, |s| s.1);
-            format!("{name} {:.1} s", (next - *at).as_secs_f64())
-        })
-        .collect();
-    println!("build stages: {}", timings.join("; "));
+    let timings: Vec<String> =
+        stages.iter().map(|(name, at)| format!("{:.1} s {name}", (*at - started).as_secs_f64())).collect();
+    println!("build stages (start times): {}; done {:.1} s", timings.join(", "), started.elapsed().as_secs_f64());
     for i in 0..2 {
         let g = &model.gears[i];
         let hz = &report.modes_hz[i];

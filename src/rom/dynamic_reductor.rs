@@ -189,8 +189,10 @@ pub fn build_dynamic_model(
         return Err("rom_torques_nm must be one or more positive torques".into());
     }
     let place = PairPlacement::new(pair);
-    let mut fe = Vec::new();
-    for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+    // The two gears' FE models, attachment modes and eigenmodes are independent: built side by
+    // side, the sequential parts of one (assembly, the Sturm check's simplicial LDLᵀ) overlap
+    // the other's parallel ones.
+    let gear_fe = |i: usize, gear: &crate::gear::Gear| -> Result<GearFe, String> {
         progress(format!("gear {}: FE model", i + 1));
         let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
         let factor = model.factorize()?;
@@ -219,7 +221,7 @@ pub fn build_dynamic_model(
             .collect();
         let n_nodes = model.mesh.mesh.nodes.len();
         let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
-        fe.push(GearFe {
+        Ok(GearFe {
             model,
             reduced,
             reconstructor,
@@ -227,8 +229,10 @@ pub fn build_dynamic_model(
             phi,
             eigenvalues: modes.eigenvalues[..n_k].to_vec(),
             n_sv: report.n_sv,
-        });
-    }
+        })
+    };
+    let (fe1, fe2) = rayon::join(|| gear_fe(0, &pair.gear1), || gear_fe(1, &pair.gear2));
+    let fe = [fe1?, fe2?];
 
     // Static analyses over one mesh cycle (and one more sample, one pitch on, for the closure
     // check), for each torque.
