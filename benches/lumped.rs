@@ -66,7 +66,9 @@ fn per_do_step_through_c(pair: &GearPair, mesh: &LumpedMesh) -> f64 {
         stepFinished: None,
         componentEnvironment: std::ptr::null_mut(),
     };
-    let c = fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), uri.as_ptr(), &cb, 0, 0);
+    // SAFETY: valid NUL-terminated strings and a callback table that outlives the instance.
+    let c =
+        unsafe { fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), uri.as_ptr(), &cb, 0, 0) };
     assert!(!c.is_null());
     let vr = |n: &str| value_reference(n).unwrap();
     let (tau, w2) = ([vr("tau_1"), vr("tau_2")], vr("w_2"));

@@ -79,7 +79,7 @@ fn callbacks() -> fmi2CallbackFunctions {
 fn instantiate_at(name: &str, dir: &Path, guid: &str) -> fmi2Component {
     let (name, guid, uri) = (CString::new(name).unwrap(), CString::new(guid).unwrap(), CString::new(uri(dir)).unwrap());
     let cb = callbacks();
-    fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), uri.as_ptr(), &cb, 0, 1)
+    unsafe { fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), uri.as_ptr(), &cb, 0, 1) }
 }
 
 fn instantiate(name: &str) -> fmi2Component {
@@ -235,7 +235,7 @@ fn nan_input_is_refused_and_the_run_continues_from_a_saved_state() {
     let before = run(c, 0.0, 20, 1e-4);
     assert_eq!(before[..], expected[..20]);
     let mut state: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2GetFMUstate(c, &mut state), OK);
+    assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
     assert_eq!(set(c, "tau_1", f64::NAN), ERR);
     assert_logged("nan", "value reference 0: value NaN is not finite; input refused");
     assert_eq!(set(c, "tau_1", f64::INFINITY), ERR);
@@ -243,7 +243,7 @@ fn nan_input_is_refused_and_the_run_continues_from_a_saved_state() {
     assert_eq!(fmi2SetFMUstate(c, state), OK);
     let after = run(c, 20.0 * 1e-4, 20, 1e-4);
     assert_eq!(after[..], expected[20..], "the run after SetFMUstate must equal the uninterrupted run");
-    assert_eq!(fmi2FreeFMUstate(c, &mut state), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut state) }, OK);
     assert!(state.is_null());
     fmi2FreeInstance(c);
     fmi2FreeInstance(reference);
@@ -320,29 +320,29 @@ fn fmu_state_get_set_and_serialize_reproduce_outputs_bit_for_bit() {
     let c = initialized("state", None);
     run(c, 0.0, 30, 1e-4);
     let mut state: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2GetFMUstate(c, &mut state), OK);
+    assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
     let first = run(c, 30e-4, 30, 1e-4);
     assert_eq!(fmi2SetFMUstate(c, state), OK);
     let again = run(c, 30e-4, 30, 1e-4);
     assert_eq!(first, again);
 
     let mut size = 0usize;
-    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), OK);
+    assert_eq!(unsafe { fmi2SerializedFMUstateSize(c, state, &mut size) }, OK);
     let mut bytes = vec![0u8; size];
     assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr() as *mut fmi2Byte, size), OK);
     let other = initialized("state-2", None);
     let mut restored: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2DeSerializeFMUstate(other, bytes.as_ptr() as *const fmi2Byte, size, &mut restored), OK);
+    assert_eq!(unsafe { fmi2DeSerializeFMUstate(other, bytes.as_ptr() as *const fmi2Byte, size, &mut restored) }, OK);
     assert_eq!(fmi2SetFMUstate(other, restored), OK);
     assert_eq!(run(other, 30e-4, 30, 1e-4), first, "a deserialized state in another instance continues identically");
 
     // A damaged byte stream is refused with a message, never a crash.
     bytes[0] ^= 0xff;
     let mut bad: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2DeSerializeFMUstate(other, bytes.as_ptr() as *const fmi2Byte, size, &mut bad), ERR);
+    assert_eq!(unsafe { fmi2DeSerializeFMUstate(other, bytes.as_ptr() as *const fmi2Byte, size, &mut bad) }, ERR);
     assert_logged("state-2", "serialized FMU state has a wrong magic");
     for s in [&mut state, &mut restored] {
-        assert_eq!(fmi2FreeFMUstate(c, s), OK);
+        assert_eq!(unsafe { fmi2FreeFMUstate(c, s) }, OK);
     }
     fmi2FreeInstance(c);
     fmi2FreeInstance(other);
@@ -377,13 +377,15 @@ fn instantiate_refuses_a_wrong_guid_bad_uri_and_damaged_model_data() {
     let name = CString::new("uri").unwrap();
     let (g, bad_uri) = (CString::new(guid.as_str()).unwrap(), CString::new("http://example.org/resources").unwrap());
     let cb = callbacks();
-    assert!(
-        fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0).is_null()
-    );
+    assert!(unsafe {
+        fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0)
+    }
+    .is_null());
     assert_logged("uri", "fmuResourceLocation must be a local file URI");
-    assert!(
-        fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2ModelExchange, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0).is_null()
-    );
+    assert!(unsafe {
+        fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2ModelExchange, g.as_ptr(), bad_uri.as_ptr(), &cb, 0, 0)
+    }
+    .is_null());
     assert_logged("uri", "supports only fmi2CoSimulation");
 
     let good = std::fs::read(dir.join(FILE_NAME)).unwrap();
@@ -416,13 +418,13 @@ const DISCARD: fmi2Status = fmi2Status_fmi2Discard;
 
 fn state_of(c: fmi2Component) -> fmi2FMUstate {
     let mut state: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2GetFMUstate(c, &mut state), OK);
+    assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
     state
 }
 
 fn serialize(c: fmi2Component, state: fmi2FMUstate) -> Vec<u8> {
     let mut size = 0usize;
-    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), OK);
+    assert_eq!(unsafe { fmi2SerializedFMUstateSize(c, state, &mut size) }, OK);
     let mut bytes = vec![0u8; size];
     assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr() as *mut fmi2Byte, size), OK);
     bytes
@@ -431,7 +433,7 @@ fn serialize(c: fmi2Component, state: fmi2FMUstate) -> Vec<u8> {
 /// fmi2DeSerializeFMUstate of `bytes` into a new FMU state.
 fn deserialize(c: fmi2Component, bytes: &[u8]) -> (fmi2Status, fmi2FMUstate) {
     let mut state: fmi2FMUstate = std::ptr::null_mut();
-    let status = fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut state);
+    let status = unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut state) };
     (status, state)
 }
 
@@ -624,7 +626,7 @@ fn serialized_state_has_magic_version_guid_and_checksum() {
     assert_eq!(fmi2SetFMUstate(c, state), OK);
     assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), OK);
     let mut s = state;
-    assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
     fmi2FreeInstance(c);
 }
 
@@ -648,7 +650,7 @@ fn every_single_bit_flip_of_a_serialized_state_is_refused() {
             // Accepted only if it decodes to the identical state (it never does with the checksum).
             let again = serialize(c, state);
             assert_eq!(again, bytes, "bit {bit}: a flipped state was accepted and decodes to a different state");
-            assert_eq!(fmi2FreeFMUstate(c, &mut state), OK);
+            assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut state) }, OK);
         } else {
             assert_eq!(status, ERR, "bit {bit}");
             assert!(state.is_null(), "bit {bit}: a refused state must not be handed out");
@@ -664,7 +666,7 @@ fn every_single_bit_flip_of_a_serialized_state_is_refused() {
     assert_eq!(fmi2SetFMUstate(c, good), OK);
     assert_eq!(fmi2DoStep(c, 7e-4, 1e-4, 1), OK);
     let mut s = good;
-    assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
     fmi2FreeInstance(c);
 }
 
@@ -696,9 +698,9 @@ fn a_state_from_another_fmu_is_refused() {
     let (status, mut back) = deserialize(helical, &hbytes);
     assert_eq!(status, OK);
     assert_eq!(fmi2SetFMUstate(helical, back), OK);
-    assert_eq!(fmi2FreeFMUstate(helical, &mut back), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(helical, &mut back) }, OK);
     let mut h = hstate;
-    assert_eq!(fmi2FreeFMUstate(helical, &mut h), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(helical, &mut h) }, OK);
     fmi2FreeInstance(helical);
     fmi2FreeInstance(spur);
 }
@@ -745,14 +747,14 @@ fn restored_parameters_are_revalidated() {
         assert_logged(name, &format!("fmi2SetFMUstate: the FMU state is refused: {reason}"));
         assert_eq!(OUTPUTS.map(|o| get(c, o)), outputs, "{reason}: the instance keeps its state");
         let mut raw = raw;
-        assert_eq!(fmi2FreeFMUstate(c, &mut raw), OK);
+        assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut raw) }, OK);
         // Recovery: the good state, then a step.
         assert_eq!(fmi2SetFMUstate(c, good), OK);
         assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), OK);
         assert_eq!(fmi2SetFMUstate(c, good), OK);
     }
     let mut s = good;
-    assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
     fmi2FreeInstance(c);
 }
 
@@ -802,8 +804,8 @@ fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
     assert_eq!(fmi2SetFMUstate(c, good), OK);
     assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), OK);
     let (mut raw, mut good) = (raw, good);
-    assert_eq!(fmi2FreeFMUstate(c, &mut raw), OK);
-    assert_eq!(fmi2FreeFMUstate(c, &mut good), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut raw) }, OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut good) }, OK);
     fmi2FreeInstance(c);
 }
 
@@ -867,9 +869,9 @@ fn soak_a_million_steps_through_drive_brake_free_flight_and_rattle() {
     let mut step = 0usize;
     let energy = |c: fmi2Component| -> (f64, f64, f64) {
         let mut state: fmi2FMUstate = std::ptr::null_mut();
-        assert_eq!(fmi2GetFMUstate(c, &mut state), OK);
+        assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
         let snapshot = unsafe { (*(state as *const Snapshot<GearPairState>)).clone() };
-        assert_eq!(fmi2FreeFMUstate(c, &mut state), OK);
+        assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut state) }, OK);
         let s = snapshot.state;
         let model = LumpedModel::new(&mesh, s.params);
         let stored = |x: &LumpedState| model.kinetic_energy(x) + model.mesh_state(x).potential_j;
@@ -1002,9 +1004,9 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     };
     let state_of = |c: fmi2Component| -> GearPairState {
         let mut state: fmi2FMUstate = std::ptr::null_mut();
-        assert_eq!(fmi2GetFMUstate(c, &mut state), OK);
+        assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
         let snapshot = unsafe { (*(state as *const Snapshot<GearPairState>)).clone() };
-        assert_eq!(fmi2FreeFMUstate(c, &mut state), OK);
+        assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut state) }, OK);
         snapshot.state
     };
     // Stored energy T + U + W of a state, with the instance's own inertia and damping.

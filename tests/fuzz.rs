@@ -210,7 +210,7 @@ fn instantiate_at(name: &str, dir: &Path, guid: &str) -> fmi2Component {
     let (name, guid, uri) = (CString::new(name).unwrap(), CString::new(guid).unwrap(), CString::new(uri).unwrap());
     let cb = callbacks();
     // Logging off: errors and discards are logged anyway, which is what the targets look at.
-    fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), uri.as_ptr(), &cb, 0, 0)
+    unsafe { fmi2Instantiate(name.as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), uri.as_ptr(), &cb, 0, 0) }
 }
 
 fn instantiate(name: &str) -> fmi2Component {
@@ -254,12 +254,12 @@ fn real_state_bytes() -> &'static Vec<u8> {
             assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), OK);
         }
         let mut s: fmi2FMUstate = std::ptr::null_mut();
-        assert_eq!(fmi2GetFMUstate(c, &mut s), OK);
+        assert_eq!(unsafe { fmi2GetFMUstate(c, &mut s) }, OK);
         let mut size = 0;
-        assert_eq!(fmi2SerializedFMUstateSize(c, s, &mut size), OK);
+        assert_eq!(unsafe { fmi2SerializedFMUstateSize(c, s, &mut size) }, OK);
         let mut bytes = vec![0u8; size];
         assert_eq!(fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size), OK);
-        assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+        assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
         fmi2FreeInstance(c);
         bytes
     })
@@ -740,7 +740,7 @@ fn fuzz_state_decoder() {
         let name = unique_name("state");
         let c = instantiate(&name);
         let mut s: fmi2FMUstate = std::ptr::null_mut();
-        let status = no_panic("fmi2DeSerializeFMUstate", &case, || {
+        let status = no_panic("fmi2DeSerializeFMUstate", &case, || unsafe {
             fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s)
         })?;
         prop_assert!(status == OK || status == ERR, "DeSerialize returned {status}");
@@ -787,7 +787,7 @@ fn fuzz_state_decoder() {
             if snap.phase != Phase::StepComplete {
                 prop_assert_eq!(status, ERR, "DoStep accepted in phase {:?}", snap.phase);
             }
-            prop_assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+            prop_assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
         }
         fmi2FreeInstance(c);
         take_logs(&name);
@@ -1024,10 +1024,10 @@ fn run_call(
         Call::GetFMUstate(index) => {
             let target = index.and_then(|i| pool_index(m, i));
             let s = match target {
-                Some(i) => fmi2GetFMUstate(c, &mut m.pool[i].0),
+                Some(i) => unsafe { fmi2GetFMUstate(c, &mut m.pool[i].0) },
                 None => {
                     let mut st: fmi2FMUstate = std::ptr::null_mut();
-                    let s = fmi2GetFMUstate(c, &mut st);
+                    let s = unsafe { fmi2GetFMUstate(c, &mut st) };
                     if !st.is_null() {
                         m.pool.push((st, before));
                     }
@@ -1057,9 +1057,9 @@ fn run_call(
         },
         Call::FreeFMUstate(i) => {
             let s = match pool_index(m, *i) {
-                None => fmi2FreeFMUstate(c, std::ptr::null_mut()),
+                None => unsafe { fmi2FreeFMUstate(c, std::ptr::null_mut()) },
                 Some(i) => {
-                    let s = fmi2FreeFMUstate(c, &mut m.pool[i].0);
+                    let s = unsafe { fmi2FreeFMUstate(c, &mut m.pool[i].0) };
                     if allowed && s == OK {
                         prop_assert!(m.pool[i].0.is_null(), "FreeFMUstate left the pointer set");
                         m.pool.remove(i);
@@ -1072,13 +1072,13 @@ fn run_call(
         Call::SerializeRoundTrip { index, corrupt, wrong_size } => match pool_index(m, *index) {
             None => {
                 let mut size = 0;
-                let s = fmi2SerializedFMUstateSize(c, std::ptr::null_mut(), &mut size);
+                let s = unsafe { fmi2SerializedFMUstateSize(c, std::ptr::null_mut(), &mut size) };
                 (s, vec![ERR], vec![error_phase])
             }
             Some(i) => {
                 let (st, rec) = m.pool[i];
                 let mut size = 0;
-                let s = fmi2SerializedFMUstateSize(c, st, &mut size);
+                let s = unsafe { fmi2SerializedFMUstateSize(c, st, &mut size) };
                 if !(allowed && s == OK) {
                     (s, vec![OK], vec![before.phase])
                 } else {
@@ -1095,7 +1095,8 @@ fn run_call(
                             bytes[at % size] ^= mask;
                         }
                         let mut out: fmi2FMUstate = std::ptr::null_mut();
-                        let s = fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, size, &mut out);
+                        let s =
+                            unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, size, &mut out) };
                         if s == OK {
                             m.pool.push((out, rec));
                         }
@@ -1218,7 +1219,7 @@ fn call_sequences(target: &'static str, r: &'static Resources, short: u32) {
                 m.rec.phase = actual;
             }
             for (mut st, _) in std::mem::take(&mut m.pool) {
-                prop_assert_eq!(fmi2FreeFMUstate(c, &mut st), OK);
+                prop_assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut st) }, OK);
                 prop_assert!(st.is_null());
             }
             Ok(())
@@ -1317,7 +1318,7 @@ fn regression_restored_state_is_held_to_the_stability_contract() {
             let name = unique_name("stability");
             let c = instantiate(&name);
             let mut s: fmi2FMUstate = std::ptr::null_mut();
-            let status = fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s);
+            let status = unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s) };
             if phase == Phase::Instantiated {
                 assert_eq!(status, OK, "{what} before initialization: {:?}", take_logs(&name));
                 assert_eq!(fmi2SetFMUstate(c, s), OK);
@@ -1325,7 +1326,7 @@ fn regression_restored_state_is_held_to_the_stability_contract() {
                 assert_eq!(fmi2EnterInitializationMode(c), OK);
                 assert_eq!(fmi2ExitInitializationMode(c), ERR);
                 assert!(take_logs(&name).iter().any(|l| l.contains("stability limit")));
-                assert_eq!(fmi2FreeFMUstate(c, &mut s), OK);
+                assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
             } else {
                 assert_eq!(status, ERR, "{what} in phase {phase:?} was accepted");
                 let logs = take_logs(&name);

@@ -64,8 +64,11 @@ pub extern "C" fn fmi2GetVersion() -> fmi2String {
     VERSION.as_ptr()
 }
 
+/// # Safety
+/// FMI 2.0's contract: `functions` points to the master's callback table and every string is
+/// NULL or NUL-terminated (NULLs are refused). Unsafe in Rust because it reads through them.
 #[no_mangle]
-pub extern "C" fn fmi2Instantiate(
+pub unsafe extern "C" fn fmi2Instantiate(
     instance_name: fmi2String,
     fmu_type: fmi2Type,
     fmu_guid: fmi2String,
@@ -292,8 +295,11 @@ pub extern "C" fn fmi2SetString(
     guard(c, "fmi2SetString", allowed::SET, |i| no_such_variables(i, "fmi2SetString", vr, n))
 }
 
+/// # Safety
+/// `state` is NULL (refused) or points to writable storage for one `fmi2FMUstate`, which holds
+/// NULL or a state this FMU made.
 #[no_mangle]
-pub extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     guard(c, "fmi2GetFMUstate", allowed::ANY_BUT_FATAL, |i| {
         if state.is_null() {
             return i.fail("fmi2GetFMUstate", "FMUstate pointer is NULL");
@@ -326,8 +332,11 @@ pub extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2
     })
 }
 
+/// # Safety
+/// `state` is NULL (refused) or points to an `fmi2FMUstate` that holds NULL or a state this FMU
+/// made and has not freed.
 #[no_mangle]
-pub extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     guard(c, "fmi2FreeFMUstate", allowed::ANY_BUT_FATAL, |_| {
         if !state.is_null() && unsafe { !(*state).is_null() } {
             unsafe {
@@ -347,8 +356,14 @@ fn serialized(i: &mut Inst, function: &str, state: fmi2FMUstate) -> Result<Vec<u
     bytes.map_err(|e| i.fail(function, &e))
 }
 
+/// # Safety
+/// `state` is a state this FMU made (NULL is refused); `size` is NULL (refused) or writable.
 #[no_mangle]
-pub extern "C" fn fmi2SerializedFMUstateSize(c: fmi2Component, state: fmi2FMUstate, size: *mut usize) -> fmi2Status {
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
     guard(c, "fmi2SerializedFMUstateSize", allowed::ANY_BUT_FATAL, |i| {
         if size.is_null() {
             return i.fail("fmi2SerializedFMUstateSize", "size is NULL");
@@ -388,8 +403,11 @@ pub extern "C" fn fmi2SerializeFMUstate(
     })
 }
 
+/// # Safety
+/// `bytes` holds `size` readable bytes (NULL with 0 is empty); `state` is NULL (refused) or
+/// points to writable storage for one `fmi2FMUstate`.
 #[no_mangle]
-pub extern "C" fn fmi2DeSerializeFMUstate(
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     c: fmi2Component,
     bytes: *const fmi2Byte,
     size: usize,
