@@ -479,18 +479,27 @@ fn undamped_energy_drift(
     (drift, vib, e0, s.anchor)
 }
 
+/// The pair with the build's damping, stepped by velocity Verlet, and Verlet's default step
+/// (0.6 of its stability limit on the linearized pair, `linear::default_step`).
+fn verlet_at_its_default_step(f: &Fixture) -> (PmorDynamics<'_>, f64) {
+    let m = &f.model;
+    let mut verlet = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
+    verlet.integrator = Integrator::Verlet;
+    let h = linear::default_step(&verlet).unwrap().max_step_s;
+    (verlet, h)
+}
+
 /// Velocity Verlet (`--integrator verlet`) at its own default step, 0.6 of its stability limit
-/// on the linearized pair (evidence: the same first integral as above, point loads). It is second order, so its energy error is a bounded
-/// oscillation of size (ωh)² in the modes that ring, not a drift: halving the step divides it
-/// by about four (asserted ≥ 3), and at the default step it stays within 1e-4 of the total.
+/// on the linearized pair (evidence: the same first integral as above, point loads). It is
+/// second order, so its energy error is a bounded oscillation of size (ωh)² in the modes that
+/// ring, not a drift: halving the step divides it by about four (asserted ≥ 3), and at the
+/// default step it stays within 1e-4 of the total.
 #[test]
 fn velocity_verlet_keeps_the_energy_at_the_default_step() {
     use gearfmu::dynamics::pmor::contact::Loading;
     let f = fixture();
     let m = &f.model;
-    let mut verlet = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
-    verlet.integrator = Integrator::Verlet;
-    let h = linear::default_step(&verlet).unwrap().max_step_s;
+    let (_, h) = verlet_at_its_default_step(f);
     let (drift, vib, e0, anchors) = undamped_energy_drift(m, &f.place, h, Loading::Point, Integrator::Verlet);
     let (drift_half, _, _, _) = undamped_energy_drift(m, &f.place, 0.5 * h, Loading::Point, Integrator::Verlet);
     eprintln!(
@@ -518,9 +527,7 @@ fn velocity_verlet_keeps_the_energy_at_the_default_step() {
 fn velocity_verlet_books_damping_and_input_work_in_the_energy_balance() {
     let f = fixture();
     let m = &f.model;
-    let mut verlet = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
-    verlet.integrator = Integrator::Verlet;
-    let h = linear::default_step(&verlet).unwrap().max_step_s;
+    let (verlet, h) = verlet_at_its_default_step(f);
     let rb = base_radii(m);
     let torques = [200.0, -0.8 * 200.0 * rb[1] / rb[0]];
     let pitch2 = 2.0 * PI / m.pair.gear2.teeth as f64;

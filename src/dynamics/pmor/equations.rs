@@ -104,10 +104,8 @@ pub struct GearTerms {
     pub force: DVector<f64>,
     pub kinetic_j: f64,
     pub elastic_j: f64,
-    /// η̇ᵀDη̇ (W).
-    pub dissipation_w: f64,
-    /// The damping force Dq̇ over (θ, η) (zero on θ): integrators that book the dissipation as
-    /// the work of this force on their own displacement need it.
+    /// The damping force Dq̇ over (θ, η) (zero on θ). Its power q̇ᵀDq̇ is the dissipation RK4
+    /// integrates; velocity Verlet books its work on the step's own displacement instead.
     pub damping_force: DVector<f64>,
 }
 
@@ -320,7 +318,6 @@ pub fn gear_terms(
     let k_eta = &k_psi * &psi;
     let mut elastic = 0.5 * psi.dot(&k_eta);
     force[0] -= 0.5 * psi.dot(&(&dk_psi * &psi));
-    let mut dissipation = 0.0;
     let mut damping_force = DVector::<f64>::zeros(n_q);
     for j in 0..n_k {
         let lam = gear.eigenvalues[j];
@@ -328,7 +325,6 @@ pub fn gear_terms(
         let damp = 2.0 * damping.modes_ratio * lam.sqrt() * etad_phi[j];
         force[1 + j] -= lam * eta_phi[j] + damp;
         damping_force[1 + j] = damp;
-        dissipation += damp * etad_phi[j];
     }
     let damp_psi = if damping.shapes_ratio > 0.0 {
         let eig = nalgebra::SymmetricEigen::new(k_psi.clone());
@@ -343,6 +339,5 @@ pub fn gear_terms(
         force[1 + n_k + m] -= k_eta[m] + damp_psi[m];
         damping_force[1 + n_k + m] = damp_psi[m];
     }
-    dissipation += psid.dot(&damp_psi);
-    GearTerms { mass, force, kinetic_j: kinetic, elastic_j: elastic, dissipation_w: dissipation, damping_force }
+    GearTerms { mass, force, kinetic_j: kinetic, elastic_j: elastic, damping_force }
 }

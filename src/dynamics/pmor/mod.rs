@@ -233,7 +233,7 @@ impl<'a> PmorDynamics<'a> {
             dy[l.v(i)..l.v(i) + n].copy_from_slice(acc.as_slice());
             out.kinetic_j += terms.kinetic_j;
             out.elastic_j += terms.elastic_j;
-            dissipation += terms.dissipation_w;
+            dissipation += terms.damping_force.iter().zip(&y[l.v(i)..l.v(i) + n]).map(|(f, v)| f * v).sum::<f64>();
             out.damping_force[l.q(i)..l.q(i) + n].copy_from_slice(terms.damping_force.as_slice());
         }
         let n = y.len();
