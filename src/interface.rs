@@ -33,14 +33,18 @@ struct File {
 
 pub const VARIABLES_TOML: &str = include_str!("../modelDescription/variables.toml");
 
-/// All variables, in the order of the file (which is the order of modelDescription.xml).
-pub fn variables() -> Vec<Variable> {
-    let file: File =
-        toml::from_str(VARIABLES_TOML).expect("modelDescription/variables.toml is valid (checked by tests)");
-    file.variable
+/// All variables, in the order of the file (which is the order of modelDescription.xml). The
+/// text is parsed once per process: every instantiation reads this table.
+pub fn variables() -> &'static [Variable] {
+    static VARIABLES: std::sync::OnceLock<Vec<Variable>> = std::sync::OnceLock::new();
+    VARIABLES.get_or_init(|| {
+        let file: File =
+            toml::from_str(VARIABLES_TOML).expect("modelDescription/variables.toml is valid (checked by tests)");
+        file.variable
+    })
 }
 
 /// The value reference of a variable by name.
 pub fn value_reference(name: &str) -> Option<u32> {
-    variables().into_iter().find(|v| v.name == name).map(|v| v.value_reference)
+    variables().iter().find(|v| v.name == name).map(|v| v.value_reference)
 }

@@ -349,7 +349,7 @@ fn fmu_state_get_set_and_serialize_reproduce_outputs_bit_for_bit() {
 }
 
 #[test]
-fn two_instances_share_nothing() {
+fn two_instances_share_no_state() {
     let solo = initialized("solo", None);
     let solo_out = run(solo, 0.0, 25, 1e-4);
     let a = initialized("a", None);
@@ -364,6 +364,43 @@ fn two_instances_share_nothing() {
     assert_eq!(a_out, solo_out, "instance a is unaffected by instance b");
     assert!(get(b, "w_1") < 0.0 && get(a, "w_1") > 0.0);
     for c in [solo, a, b] {
+        fmi2FreeInstance(c);
+    }
+}
+
+/// Instances of one FMU share its model data (`dynamics::shared_model`), but only for identical
+/// bytes: a model file damaged in place while an instance of it is alive (same size, same
+/// directory, within the file system's timestamp granularity) is still read, checked and refused.
+#[test]
+fn instances_share_model_data_only_for_identical_bytes() {
+    use gearfmu::fmi2::instance::Instance;
+    use gearfmu::FmuModel;
+    let (dir, guid) = resources();
+    let shared_dir = dir.with_file_name("shared");
+    std::fs::create_dir_all(&shared_dir).unwrap();
+    let good = std::fs::read(dir.join(FILE_NAME)).unwrap();
+    std::fs::write(shared_dir.join(FILE_NAME), &good).unwrap();
+    let a = instantiate_at("share-a", &shared_dir, guid);
+    let b = instantiate_at("share-b", &shared_dir, guid);
+    assert!(!a.is_null() && !b.is_null());
+    // White-box: the component is the instance; its model is one allocation for both.
+    let physics = |c: fmi2Component| {
+        let i = unsafe { &*(c as *const Instance<FmuModel>) };
+        &i.model.physics as *const _
+    };
+    assert_eq!(physics(a), physics(b), "two instances of one model file decode it once");
+    let mut damaged = good.clone();
+    let middle = damaged.len() / 2;
+    damaged[middle] ^= 0x01;
+    std::fs::write(shared_dir.join(FILE_NAME), &damaged).unwrap();
+    assert!(instantiate_at("share-damaged", &shared_dir, guid).is_null());
+    assert_logged("share-damaged", "corrupted (checksum mismatch)");
+    // The live instances keep their (checked) model and still run.
+    assert_eq!(fmi2SetupExperiment(a, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(a), OK);
+    assert_eq!(fmi2ExitInitializationMode(a), OK);
+    assert_eq!(fmi2DoStep(a, 0.0, 1e-4, 1), OK);
+    for c in [a, b] {
         fmi2FreeInstance(c);
     }
 }

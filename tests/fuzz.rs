@@ -11,6 +11,7 @@
 use fmi_sys::fmi2::*;
 use gearfmu::dynamics::fmu::{GearPairFmu, GearPairState, LUMPED_DEFAULT_MAX_STEP_S};
 use gearfmu::dynamics::lumped::LumpedMesh;
+use gearfmu::dynamics::pmor::PmorState;
 use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fmi2::exports::*;
 use gearfmu::fmi2::instance::{deserialize_snapshot, serialize_snapshot, time_tolerance, Instance, Snapshot};
@@ -136,6 +137,10 @@ struct Resources {
     /// Whether reading mesh_force or mesh_stiffness may be refused: PMOR-Hertz evaluates the
     /// contact for them, and a state outside the Hertz law's range is an error, not a number.
     contact_outputs_can_fail: bool,
+    /// An instance held for the whole run, as a master holding one instance while it creates
+    /// others: the targets' instances then share its model data (`dynamics::shared_model`)
+    /// instead of decoding the file each case. The decoder has its own target.
+    _anchor: usize,
 }
 
 /// A resources folder holding `model` for `pair`, under the process's temporary directory.
@@ -151,7 +156,9 @@ fn write_resources(
     std::fs::create_dir_all(&dir).unwrap();
     let model_bin = ModelFile { guid: guid.clone(), pair_name: pair.name.clone(), model }.to_bytes();
     std::fs::write(dir.join(FILE_NAME), &model_bin).unwrap();
-    Resources { dir, guid, model_bin, default_max_step_s, contact_outputs_can_fail }
+    let anchor = instantiate_at(&unique_name(&format!("{folder}-anchor")), &dir, &guid);
+    assert!(!anchor.is_null(), "the anchor instance of {folder} failed");
+    Resources { dir, guid, model_bin, default_max_step_s, contact_outputs_can_fail, _anchor: anchor as usize }
 }
 
 fn kurokawa_spur() -> GearPair {
@@ -185,6 +192,9 @@ fn pmor_resources() -> &'static Resources {
         write_resources("resources-pmor", &pair, ModelKind::PmorHertz(Box::new(model)), max_step, true)
     })
 }
+
+/// The lumped mesh law's largest tangent stiffness (a scan of its tables, done once).
+static STIFFEST: OnceLock<f64> = OnceLock::new();
 
 /// The lumped mesh inside the resources' model file.
 fn lumped_mesh() -> &'static LumpedMesh {
@@ -236,33 +246,30 @@ fn vr(name: &str) -> u32 {
     value_reference(name).unwrap()
 }
 
-/// A lumped instance initialized and stepped 20 times under drive and a viscous load, its FMU
+/// An instance of `r` initialized and stepped 20 times under drive and a viscous load, its FMU
 /// state serialized: the real bytes the state targets mutate.
-fn real_state_bytes() -> &'static Vec<u8> {
-    static B: OnceLock<Vec<u8>> = OnceLock::new();
-    B.get_or_init(|| {
-        let name = unique_name("state-source");
-        let c = instantiate(&name);
-        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
-        assert_eq!(fmi2EnterInitializationMode(c), OK);
-        assert_eq!(fmi2ExitInitializationMode(c), OK);
-        let h = 1e-4;
-        for k in 0..20 {
-            let mut w2 = 0.0;
-            assert_eq!(fmi2GetReal(c, &vr("w_2"), 1, &mut w2), OK);
-            assert_eq!(fmi2SetReal(c, [vr("tau_1"), vr("tau_2")].as_ptr(), 2, [185.0, -20.0 * w2].as_ptr()), OK);
-            assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), OK);
-        }
-        let mut s: fmi2FMUstate = std::ptr::null_mut();
-        assert_eq!(unsafe { fmi2GetFMUstate(c, &mut s) }, OK);
-        let mut size = 0;
-        assert_eq!(unsafe { fmi2SerializedFMUstateSize(c, s, &mut size) }, OK);
-        let mut bytes = vec![0u8; size];
-        assert_eq!(fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size), OK);
-        assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
-        fmi2FreeInstance(c);
-        bytes
-    })
+fn serialized_state_of(r: &Resources) -> Vec<u8> {
+    let name = unique_name("state-source");
+    let c = instantiate_from(&name, r);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    let h = 1e-4;
+    for k in 0..20 {
+        let mut w2 = 0.0;
+        assert_eq!(fmi2GetReal(c, &vr("w_2"), 1, &mut w2), OK);
+        assert_eq!(fmi2SetReal(c, [vr("tau_1"), vr("tau_2")].as_ptr(), 2, [185.0, -20.0 * w2].as_ptr()), OK);
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), OK, "{:?}", take_logs(&name));
+    }
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(unsafe { fmi2GetFMUstate(c, &mut s) }, OK);
+    let mut size = 0;
+    assert_eq!(unsafe { fmi2SerializedFMUstateSize(c, s, &mut size) }, OK);
+    let mut bytes = vec![0u8; size];
+    assert_eq!(fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size), OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
+    fmi2FreeInstance(c);
+    bytes
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -520,16 +527,48 @@ enum ModelFileCase {
     Resealed(Vec<ByteEdit>),
 }
 
+/// The lumped spur model with its mesh-law tables decimated 8× along the roll position (128 rows
+/// of 1024): the same structure and code paths for the decoder and the FMU, an eighth of the bytes
+/// to checksum and decode per case.
+fn small_lumped_model_bin() -> Vec<u8> {
+    use gearfmu::dynamics::mesh_law::MeshLaw;
+    let mut mesh = lumped_mesh().clone();
+    let decimate = |law: &MeshLaw| {
+        let k = law.force_levels_n.len();
+        let rows: Vec<f64> = law.deflection_m.chunks(k).step_by(8).flatten().copied().collect();
+        assert_eq!(rows.len() % k, 0);
+        MeshLaw::new(law.base_pitch_m, law.force_levels_n.clone(), rows)
+    };
+    mesh.drive = decimate(&mesh.drive);
+    mesh.coast = decimate(&mesh.coast);
+    mesh.drive_pairs = mesh.drive_pairs.iter().step_by(8).copied().collect();
+    mesh.coast_pairs = mesh.coast_pairs.iter().step_by(8).copied().collect();
+    let pair = kurokawa_spur();
+    let model = ModelKind::Lumped(mesh);
+    let guid = ModelFile::compute_guid(gearfmu::interface::VARIABLES_TOML, &pair.name, &model);
+    ModelFile { guid, pair_name: pair.name, model }.to_bytes()
+}
+
 #[test]
 fn fuzz_model_file_decoder() {
-    let original = resources().model_bin.clone();
+    model_file_decoder("model_file_decoder", small_lumped_model_bin(), 500);
+}
+
+/// The PMOR-Hertz model file (the small-basis spur model of `pmor_resources`): its decoder and
+/// the model checks at instantiate, initialization and a step.
+#[test]
+fn fuzz_model_file_decoder_pmor_hertz() {
+    model_file_decoder("model_file_decoder_pmor_hertz", pmor_resources().model_bin.clone(), 100);
+}
+
+fn model_file_decoder(target: &'static str, original: Vec<u8>, short: u32) {
     assert!(ModelFile::from_bytes(&original).is_ok());
     let edits = || proptest::collection::vec(byte_edit(), 1..8);
     let strategy = prop_oneof![
         1 => edits().prop_map(ModelFileCase::Raw),
         3 => edits().prop_map(ModelFileCase::Resealed),
     ];
-    fuzz("model_file_decoder", 500, strategy, |case| {
+    fuzz(target, short, strategy, |case| {
         let bytes = match &case {
             ModelFileCase::Raw(e) => {
                 let mut b = original.clone();
@@ -543,7 +582,7 @@ fn fuzz_model_file_decoder() {
             }
         };
         let result = no_panic("ModelFile::from_bytes", &case, || ModelFile::from_bytes(&bytes))?;
-        stat("model_file_decoder", if result.is_ok() { "decoded" } else { "refused" });
+        stat(target, if result.is_ok() { "decoded" } else { "refused" });
         match result {
             Err(e) => prop_assert!(!e.trim().is_empty()),
             Ok(file) => {
@@ -559,15 +598,18 @@ fn fuzz_model_file_decoder() {
                 no_panic("GearPairFmu::from_model_file", &case, || GearPairFmu::from_model_file(file).map(|_| ()))?
                     .ok();
                 if CString::new(guid.clone()).is_ok() {
-                    let dir =
-                        resources().dir.parent().unwrap().join(format!("edited-{:?}", std::thread::current().id()));
+                    let dir = resources()
+                        .dir
+                        .parent()
+                        .unwrap()
+                        .join(format!("edited-{target}-{:?}", std::thread::current().id()));
                     std::fs::create_dir_all(&dir).unwrap();
                     std::fs::write(dir.join(FILE_NAME), &bytes).unwrap();
                     let name = unique_name("model-file");
                     let t0 = Instant::now();
                     let c = no_panic("fmi2Instantiate", &case, || instantiate_at(&name, &dir, &guid))?;
                     if c.is_null() {
-                        stat("model_file_decoder", "instantiate refused");
+                        stat(target, "instantiate refused");
                     } else {
                         let calls = no_panic("FMI calls on an edited model file", &case, || {
                             let mut statuses = vec![
@@ -584,10 +626,7 @@ fn fuzz_model_file_decoder() {
                             statuses
                         })?;
                         prop_assert!(calls.iter().all(|s| status_is_valid(*s)), "statuses {calls:?}");
-                        stat(
-                            "model_file_decoder",
-                            if calls[3] == OK { "instance stepped" } else { "instance refused" },
-                        );
+                        stat(target, if calls[3] == OK { "instance stepped" } else { "instance refused" });
                     }
                     prop_assert!(t0.elapsed() < Duration::from_secs(2), "took {:?}", t0.elapsed());
                     let logs = take_logs(&name);
@@ -704,18 +743,125 @@ fn status_is_valid(s: fmi2Status) -> bool {
 
 #[test]
 fn fuzz_state_decoder() {
-    let original = real_state_bytes().clone();
-    let guid = resources().guid.clone();
-    let real: Snapshot<GearPairState> = deserialize_snapshot(&original, &guid).unwrap();
+    let r = resources();
+    let original = serialized_state_of(r);
+    let real: Snapshot<GearPairState> = deserialize_snapshot(&original, &r.guid).unwrap();
+    let forged = forged_state(real);
+    state_decoder("state_decoder", r, original, forged, 500, |st, initialized| {
+        prop_assert!(st.pmor.is_none());
+        if initialized {
+            let limit = gearfmu::dynamics::lumped::rk4_stability_limit_s(
+                lumped_mesh(),
+                &st.params,
+                *STIFFEST.get_or_init(|| gearfmu::dynamics::lumped::stiffest_tangent_stiffness(lumped_mesh())),
+            );
+            prop_assert!(st.max_step_s <= limit, "an initialized state with max_step {} > {limit}", st.max_step_s);
+        }
+        Ok(())
+    });
+}
+
+/// The PMOR-Hertz state: the reduced pair's own fields forged too (angles, elastic coordinates of
+/// the wrong length or hostile value, the anchored pitch as any integer).
+#[test]
+fn fuzz_state_decoder_pmor_hertz() {
+    let r = pmor_resources();
+    let original = serialized_state_of(r);
+    let real: Snapshot<GearPairState> = deserialize_snapshot(&original, &r.guid).unwrap();
+    let pmor = real.state.pmor.clone().expect("an initialized PMOR-Hertz state");
+    let sizes = [pmor.eta[0].len(), pmor.eta[1].len()];
+    // Either the FMI-level fields forged (the reduced pair's state as it was) or the reduced
+    // pair's own (the rest as it was): both at once would almost never be accepted.
+    let outer = forged_state(real.clone());
+    let inner = forged_pmor_state(pmor).prop_map(move |p| {
+        let mut snap = real.clone();
+        snap.state.pmor = p;
+        StateCase::Forged(Box::new(snap))
+    });
+    let forged = prop_oneof![outer, inner];
+    state_decoder("state_decoder_pmor_hertz", r, original, forged, 100, move |st, _| {
+        if let Some(p) = &st.pmor {
+            let all = [&p.theta[..], &p.omega[..], &p.eta[0], &p.eta[1], &p.eta_dot[0], &p.eta_dot[1]].concat();
+            prop_assert!(all.iter().all(|x| x.is_finite()), "a non-finite PMOR-Hertz state was accepted");
+            for i in 0..2 {
+                prop_assert!(p.eta[i].len() == sizes[i] && p.eta_dot[i].len() == sizes[i]);
+            }
+        }
+        Ok(())
+    });
+}
+
+/// A PMOR-Hertz state with hostile fields: each field mostly as it was, sometimes hostile; the
+/// elastic coordinates sometimes one entry hostile or one too many or too few; sometimes none.
+fn forged_pmor_state(real: PmorState) -> impl Strategy<Value = Option<PmorState>> {
+    let coords = |v: Vec<f64>| {
+        let n = v.len();
+        prop_oneof![
+            4 => Just(v.clone()),
+            2 => (0..n.max(1), hostile_f64()).prop_map({
+                let v = v.clone();
+                move |(i, x)| {
+                    let mut v = v.clone();
+                    if let Some(e) = v.get_mut(i) {
+                        *e = x;
+                    }
+                    v
+                }
+            }),
+            1 => Just(v[..n.saturating_sub(1)].to_vec()),
+            1 => Just([&v[..], &[0.0]].concat()),
+        ]
+    };
+    let p = real.clone();
+    (
+        [field_f64(p.theta[0]), field_f64(p.theta[1]), field_f64(p.omega[0]), field_f64(p.omega[1])],
+        [
+            coords(p.eta[0].clone()),
+            coords(p.eta[1].clone()),
+            coords(p.eta_dot[0].clone()),
+            coords(p.eta_dot[1].clone()),
+        ],
+        [
+            prop_oneof![3 => Just(p.anchor[0]), 1 => any::<i64>(), 1 => -3i64..3],
+            prop_oneof![3 => Just(p.anchor[1]), 1 => any::<i64>(), 1 => -3i64..3],
+        ],
+        (field_f64(p.input_work_j), field_f64(p.dissipated_j)),
+        0..8u8,
+    )
+        .prop_map(move |([t1, t2, w1, w2], [e1, e2, d1, d2], anchor, (input_work_j, dissipated_j), none)| {
+            (none != 0).then(|| PmorState {
+                theta: [t1, t2],
+                omega: [w1, w2],
+                eta: [e1, e2],
+                eta_dot: [d1, d2],
+                anchor,
+                input_work_j,
+                dissipated_j,
+            })
+        })
+}
+
+/// The state decoder against the instances of `r`: raw and resealed byte edits of `original`, and
+/// `forged` states; `model_checks` holds an accepted state to the model kind's own contract
+/// (`initialized`: a phase after fmi2ExitInitializationMode).
+fn state_decoder(
+    target: &'static str,
+    r: &'static Resources,
+    original: Vec<u8>,
+    forged: impl Strategy<Value = StateCase>,
+    short: u32,
+    model_checks: impl Fn(&GearPairState, bool) -> Result<(), TestCaseError>,
+) {
+    let guid = r.guid.clone();
     let (state_guid, payload) = state_parts(&original);
     assert_eq!(state_guid, guid.as_bytes());
     let edits = || proptest::collection::vec(byte_edit(), 1..6);
     let strategy = prop_oneof![
         1 => edits().prop_map(StateCase::Raw),
         3 => edits().prop_map(StateCase::Resealed),
-        3 => forged_state(real.clone()),
+        3 => forged,
     ];
-    fuzz("state_decoder", 500, strategy, |case| {
+    fuzz(target, short, strategy, |case| {
         let bytes = match &case {
             StateCase::Raw(e) => {
                 let mut b = original.clone();
@@ -738,7 +884,7 @@ fn fuzz_state_decoder() {
         }
         // Through the C API: DeSerialize, and if accepted SetFMUstate and one DoStep.
         let name = unique_name("state");
-        let c = instantiate(&name);
+        let c = instantiate_from(&name, r);
         let mut s: fmi2FMUstate = std::ptr::null_mut();
         let status = no_panic("fmi2DeSerializeFMUstate", &case, || unsafe {
             fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s)
@@ -750,7 +896,7 @@ fn fuzz_state_decoder() {
             StateCase::Forged(_) => "forged",
         };
         let decoded_ok = if decoded.is_ok() { "decoded" } else { "undecodable" };
-        stat("state_decoder", &format!("{kind} {decoded_ok} {}", if status == OK { "accepted" } else { "refused" }));
+        stat(target, &format!("{kind} {decoded_ok} {}", if status == OK { "accepted" } else { "refused" }));
         if status == ERR {
             prop_assert!(s.is_null());
             let logs = take_logs(&name);
@@ -767,11 +913,7 @@ fn fuzz_state_decoder() {
             prop_assert!(st.max_step_s.is_normal() && st.max_step_s > 0.0);
             prop_assert!(st.params.inertia_1_kgm2 > 0.0 && st.params.inertia_2_kgm2 > 0.0);
             prop_assert!((0.0..1.0).contains(&st.params.mesh_damping_ratio));
-            prop_assert!(st.pmor.is_none());
-            if matches!(snap.phase, Phase::StepComplete | Phase::StepFailed | Phase::Terminated) {
-                let limit = gearfmu::dynamics::lumped::rk4_stability_limit_s(lumped_mesh(), &st.params);
-                prop_assert!(st.max_step_s <= limit, "an initialized state with max_step {} > {limit}", st.max_step_s);
-            }
+            model_checks(st, matches!(snap.phase, Phase::StepComplete | Phase::StepFailed | Phase::Terminated))?;
             let status = no_panic("fmi2SetFMUstate", &case, || fmi2SetFMUstate(c, s))?;
             prop_assert_eq!(status, OK, "a decoded state was refused by SetFMUstate: {:?}", take_logs(&name));
             prop_assert_eq!(phase_of(c), snap.phase);
@@ -781,7 +923,7 @@ fn fuzz_state_decoder() {
             let status = no_panic("fmi2DoStep", &case, || fmi2DoStep(c, snap.time, h, 1))?;
             prop_assert!(status_is_valid(status));
             prop_assert!(t0.elapsed() < Duration::from_secs(2), "DoStep took {:?}", t0.elapsed());
-            stat("state_decoder", if status == OK { "step OK" } else { "step refused" });
+            stat(target, if status == OK { "step OK" } else { "step refused" });
             let logs = take_logs(&name);
             prop_assert!(!logs.iter().any(|l| l.contains("panic")), "a panic inside the FMU: {logs:?}");
             if snap.phase != Phase::StepComplete {
@@ -1304,7 +1446,7 @@ fn regression_pmor_outputs_without_contact_do_not_evaluate_it() {
 #[test]
 fn regression_restored_state_is_held_to_the_stability_contract() {
     let guid = resources().guid.clone();
-    let real: Snapshot<GearPairState> = deserialize_snapshot(real_state_bytes(), &guid).unwrap();
+    let real: Snapshot<GearPairState> = deserialize_snapshot(&serialized_state_of(resources()), &guid).unwrap();
     let mut big_step = real.clone();
     big_step.state.max_step_s = 1e-3;
     let mut light = real.clone();

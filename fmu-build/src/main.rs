@@ -434,7 +434,7 @@ fn build(
         ),
     };
     let xml = model_description::write(
-        &interface::variables(),
+        interface::variables(),
         &model_description::ModelFacts {
             model_name: &pair.name,
             guid: &guid,

@@ -131,7 +131,7 @@ mod tests {
     fn xml() -> String {
         let starts = [("inertia_1", 1.0), ("inertia_2", 2.0), ("mesh_damping_ratio", 0.05), ("max_step", 1e-5)];
         let facts = ModelFacts { model_name: "Test", guid: "{x}", description: "d", model_starts: &starts };
-        write(&gearfmu::interface::variables(), &facts).unwrap()
+        write(gearfmu::interface::variables(), &facts).unwrap()
     }
 
     /// The value references the FMU binary answers to (its name → physics map, built from
@@ -160,7 +160,7 @@ mod tests {
     #[test]
     fn a_model_start_without_a_value_is_an_error() {
         let facts = ModelFacts { model_name: "T", guid: "{x}", description: "d", model_starts: &[] };
-        let e = write(&gearfmu::interface::variables(), &facts).unwrap_err();
+        let e = write(gearfmu::interface::variables(), &facts).unwrap_err();
         // The first variable whose start the model must give (in variables.toml order).
         assert!(e.contains("max_step") && e.contains("start = \"model\""), "{e}");
     }

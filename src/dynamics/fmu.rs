@@ -6,12 +6,14 @@
 use super::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
 use super::pmor::model::PmorModel;
 use super::pmor::{PmorDynamics, PmorOutputs, PmorState};
+use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
 use crate::fmi2::{Model, Phase};
 use crate::interface;
-use crate::model_file::{ModelFile, ModelKind};
+use crate::model_file::{ModelFile, ModelKind, FILE_NAME};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use std::sync::Arc;
 
 /// The interface variables, named as in variables.toml.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,8 +120,25 @@ pub enum Physics {
     PmorHertz { model: Box<PmorModel>, place: PairPlacement },
 }
 
-pub struct GearPairFmu {
+/// The model of an FMU, shared by all its instances in one process: the data is immutable, so
+/// a second instance of the same model file costs only its state (see [`super::shared_model`]).
+pub struct GearPairFmu(Arc<LoadedPair>);
+
+impl std::ops::Deref for GearPairFmu {
+    type Target = LoadedPair;
+    fn deref(&self) -> &LoadedPair {
+        &self.0
+    }
+}
+
+/// One model file, loaded and checked.
+pub struct LoadedPair {
+    /// The GUID the model file carries; instantiate compares it with the master's.
+    guid: String,
     pub physics: Physics,
+    /// Lumped: the mesh law's largest tangent stiffness (N/m), which sets RK4's stability limit
+    /// (0 for PMOR-Hertz, whose limit comes from its linearization).
+    stiffest_mesh_n_per_m: f64,
     /// (value reference, variable), from variables.toml.
     lookup: Vec<(u32, Var)>,
     /// PMOR-Hertz: the integrator's stability limit (s) for parameters other than the build's (inertias,
@@ -127,11 +146,20 @@ pub struct GearPairFmu {
     stability_limits: std::sync::Mutex<Vec<([u64; 3], f64)>>,
 }
 
+/// Stability limits kept per PMOR-Hertz model for parameter sets other than the build's.
+const STABILITY_LIMITS_KEPT: usize = 16;
+
 /// The lumped model's (s).
 pub const LUMPED_DEFAULT_MAX_STEP_S: f64 = 1e-5;
 
 impl GearPairFmu {
     pub fn from_model_file(file: ModelFile) -> Result<Self, String> {
+        Ok(GearPairFmu(Arc::new(LoadedPair::from_model_file(file)?)))
+    }
+}
+
+impl LoadedPair {
+    fn from_model_file(file: ModelFile) -> Result<Self, String> {
         let physics = match file.model {
             ModelKind::Lumped(mesh) => {
                 check_lumped_mesh(&mesh)?;
@@ -150,9 +178,15 @@ impl GearPairFmu {
                 .ok_or_else(|| format!("interface variable {} has no physics in this binary", v.name))?;
             lookup.push((v.value_reference, var));
         }
-        Ok(GearPairFmu { physics, lookup, stability_limits: Default::default() })
+        let stiffest_mesh_n_per_m = match &physics {
+            Physics::Lumped(mesh) => crate::dynamics::lumped::stiffest_tangent_stiffness(mesh),
+            Physics::PmorHertz { .. } => 0.0,
+        };
+        Ok(LoadedPair { guid: file.guid, physics, stiffest_mesh_n_per_m, lookup, stability_limits: Default::default() })
     }
+}
 
+impl GearPairFmu {
     fn var(&self, vr: u32) -> Result<Var, String> {
         self.lookup
             .iter()
@@ -208,9 +242,11 @@ impl GearPairFmu {
     /// own inertias — larger ones only lower it).
     fn check_stability(&self, s: &GearPairState) -> Result<(), String> {
         let (limit, integrator, what) = match &self.physics {
-            Physics::Lumped(mesh) => {
-                (crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params), "RK4", "the stiffest mesh mode")
-            }
+            Physics::Lumped(mesh) => (
+                crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params, self.stiffest_mesh_n_per_m),
+                "RK4",
+                "the stiffest mesh mode",
+            ),
             Physics::PmorHertz { model, place } => (
                 self.pmor_stability_limit(model, place, s)?,
                 model.integrator.name(),
@@ -238,13 +274,20 @@ impl GearPairFmu {
             return Ok(model.stability_limit_s);
         }
         let key = [p.inertia_1_kgm2.to_bits(), p.inertia_2_kgm2.to_bits(), p.mesh_damping_ratio.to_bits()];
-        let mut cache = self.stability_limits.lock().map_err(|_| "the stability cache is poisoned".to_string())?;
-        if let Some(&(_, limit)) = cache.iter().find(|(k, _)| *k == key) {
+        // The cache is shared by the FMU's instances (a poisoned lock still holds whole entries).
+        let cache = || self.stability_limits.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(&(_, limit)) = cache().iter().find(|(k, _)| *k == key) {
             return Ok(limit);
         }
+        // Linearized without the lock, so other instances are not held up meanwhile.
         let limit = crate::dynamics::pmor::linear::default_step(&self.pmor(model, place, s))
             .map_err(|e| format!("the stability limit with these parameters could not be found: {e}"))?
             .stability_limit_s;
+        let mut cache = cache();
+        // Bounded: a master that tries ever new parameters must not grow the FMU's memory.
+        if cache.len() == STABILITY_LIMITS_KEPT {
+            cache.remove(0);
+        }
         cache.push((key, limit));
         Ok(limit)
     }
@@ -362,11 +405,14 @@ impl Model for GearPairFmu {
     type State = GearPairState;
 
     fn load(resources: &Path, guid: &str) -> Result<Self, String> {
-        let file = ModelFile::read(resources)?;
-        if file.guid != guid {
-            return Err(format!("GUID {guid} does not match the FMU's model data ({})", file.guid));
+        static LOADED: SharedByContent<LoadedPair> = SharedByContent::new();
+        let path = resources.join(FILE_NAME);
+        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let pair = LOADED.get_or_load(bytes, |bytes| LoadedPair::from_model_file(ModelFile::from_bytes(bytes)?))?;
+        if pair.guid != guid {
+            return Err(format!("GUID {guid} does not match the FMU's model data ({})", pair.guid));
         }
-        Self::from_model_file(file)
+        Ok(GearPairFmu(pair))
     }
 
     fn initial_state(&self) -> GearPairState {

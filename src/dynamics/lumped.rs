@@ -119,14 +119,19 @@ pub fn mesh_damping_coefficient(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 
     2.0 * p.mesh_damping_ratio * (mesh.reference_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
 }
 
+/// The mesh law's largest tangent stiffness on either flank (N/m). It scans every entry of both
+/// tables, so the FMU computes it once per model file, not at each check of a step.
+pub fn stiffest_tangent_stiffness(mesh: &LumpedMesh) -> f64 {
+    mesh.drive.max_tangent_stiffness().max(mesh.coast.max_tangent_stiffness())
+}
+
 /// RK4's stability limit (s) on the stiffest mesh mode: the equivalent mesh mass on the mesh law's
-/// largest tangent stiffness (either flank), with the mesh damping.
-pub fn rk4_stability_limit_s(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 {
-    let stiffness = mesh.drive.max_tangent_stiffness().max(mesh.coast.max_tangent_stiffness());
+/// largest tangent stiffness (`stiffest_tangent_stiffness`), with the mesh damping.
+pub fn rk4_stability_limit_s(mesh: &LumpedMesh, p: &LumpedParameters, stiffest_n_per_m: f64) -> f64 {
     let lambdas = crate::dynamics::rk4_stability::oscillator_eigenvalues(
         equivalent_mesh_mass(mesh, p),
         mesh_damping_coefficient(mesh, p),
-        stiffness,
+        stiffest_n_per_m,
     );
     crate::dynamics::rk4_stability::largest_stable_step(&lambdas, 1.0)
 }

@@ -8,3 +8,4 @@ pub mod mesh_law;
 pub mod mesh_stiffness;
 pub mod pmor;
 pub mod rk4_stability;
+pub mod shared_model;
