@@ -146,6 +146,24 @@ enum Command {
         #[arg(long)]
         vtk: Option<PathBuf>,
     },
+    /// A PMOR-Hertz .fmu's reduced pair linearized about its static equilibrium under T₁, at mesh
+    /// positions over a pitch: its lowest modes (natural frequency, damping ratio). What a
+    /// speed sweep's resonances are read against.
+    Linearize {
+        fmu: PathBuf,
+        /// Torque on gear 1 (N·m).
+        #[arg(long, default_value_t = 185.0)]
+        torque_nm: f64,
+        /// The instance's mesh_damping_ratio (the shapes' damping); default: the model's.
+        #[arg(long)]
+        mesh_damping_ratio: Option<f64>,
+        /// Mesh positions over one pitch of gear 2.
+        #[arg(long, default_value_t = 4)]
+        positions: usize,
+        /// Modes printed per position.
+        #[arg(short = 'n', long, default_value_t = 4)]
+        count: usize,
+    },
     /// Static transmission error: gear 2 held at N angles over P pitches, torque T₁ on gear 1.
     Ste {
         spec: PathBuf,
@@ -680,6 +698,57 @@ fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>, png: 
     Ok(())
 }
 
+fn linearize_command(
+    fmu: &Path,
+    torque_nm: f64,
+    mesh_damping_ratio: Option<f64>,
+    positions: usize,
+    count: usize,
+) -> Result<()> {
+    use gearfmu::contact::mesh_kinematics::PairPlacement;
+    use gearfmu::dynamics::pmor::{linear, PmorDynamics};
+    let file = std::fs::File::open(fmu).with_context(|| format!("cannot open {}", fmu.display()))?;
+    let mut archive = zip::ZipArchive::new(file).with_context(|| format!("{} is not an FMU (zip)", fmu.display()))?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut archive.by_name("resources/model.bin").context("the FMU has no resources/model.bin")?,
+        &mut bytes,
+    )?;
+    let ModelKind::PmorHertz(model) = ModelFile::from_bytes(&bytes).map_err(anyhow::Error::msg)?.model else {
+        anyhow::bail!(
+            "{} carries the lumped model: its linearized mesh frequency is sqrt(k (r_b1²/J1 + r_b2²/J2))/2π with k its mesh_stiffness output (`inspect`)",
+            fmu.display()
+        );
+    };
+    let shapes_ratio = mesh_damping_ratio.unwrap_or(model.shape_damping_ratio);
+    let place = PairPlacement::new(&model.pair);
+    let dynamics = PmorDynamics::new(&model, &place, model.damping(model.modal_damping_ratio, shapes_ratio), [0.0; 2]);
+    let guess = torque_nm / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
+    println!(
+        "{}: linearized at T1 = {torque_nm} N·m, modal damping {} on the eigenmodes, {shapes_ratio} on the shapes",
+        model.pair.name, model.modal_damping_ratio
+    );
+    println!("position (pitch of gear 2) | lowest modes: natural frequency |λ|/2π (Hz), damping ratio −Re λ/|λ|");
+    for j in 0..positions {
+        let share = (j as f64 + 0.5) / positions as f64;
+        let (state, torque2) =
+            linear::static_equilibrium(&dynamics, share * model.gears[1].pitch_rad(), torque_nm, guess)
+                .map_err(anyhow::Error::msg)?;
+        let lin = linear::linearize(&dynamics, &state, [torque_nm, torque2]).map_err(anyhow::Error::msg)?;
+        // Oscillating modes, one of each conjugate pair; the rigid rotation (λ ≈ 0) left out.
+        let mut modes: Vec<(f64, f64)> = lin
+            .flow_eigenvalues()
+            .into_iter()
+            .filter(|l| l.im > 0.0 && l.norm() > 2.0 * std::f64::consts::PI)
+            .map(|l| (l.norm() / (2.0 * std::f64::consts::PI), -l.re / l.norm()))
+            .collect();
+        modes.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let text: Vec<String> = modes.iter().take(count).map(|(f, z)| format!("{f:.0} Hz ζ {z:.4}")).collect();
+        println!("{share:.3} | {}", text.join(", "));
+    }
+    Ok(())
+}
+
 fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<PathBuf>) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
@@ -778,6 +847,9 @@ fn main() {
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),
         Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
+        Command::Linearize { fmu, torque_nm, mesh_damping_ratio, positions, count } => {
+            linearize_command(&fmu, torque_nm, mesh_damping_ratio, positions, count)
+        }
         Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => {
             let method = match method {
                 StaticMethod::PmorHertz => Method::PmorHertz {
