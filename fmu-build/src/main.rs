@@ -154,7 +154,7 @@ enum Command {
         /// Torque on gear 1 (N·m).
         #[arg(long, default_value_t = 185.0)]
         torque_nm: f64,
-        /// The instance's mesh_damping_ratio (the shapes' damping); default: the model's.
+        /// The instance's mesh_damping_ratio (the mesh damper along the line of action); default 0.
         #[arg(long)]
         mesh_damping_ratio: Option<f64>,
         /// Mesh positions over one pitch of gear 2.
@@ -438,7 +438,7 @@ fn build(
             [
                 ("inertia_1", m.gears[0].polar_inertia_kgm2),
                 ("inertia_2", m.gears[1].polar_inertia_kgm2),
-                ("mesh_damping_ratio", m.shape_damping_ratio),
+                ("mesh_damping_ratio", 0.0),
                 ("max_step", m.max_step_s),
             ],
             format!(
@@ -705,8 +705,7 @@ fn linearize_command(
     positions: usize,
     count: usize,
 ) -> Result<()> {
-    use gearfmu::contact::mesh_kinematics::PairPlacement;
-    use gearfmu::dynamics::pmor::{linear, PmorDynamics};
+    use gearfmu::dynamics::pmor::linear;
     let file = std::fs::File::open(fmu).with_context(|| format!("cannot open {}", fmu.display()))?;
     let mut archive = zip::ZipArchive::new(file).with_context(|| format!("{} is not an FMU (zip)", fmu.display()))?;
     let mut bytes = Vec::new();
@@ -720,13 +719,19 @@ fn linearize_command(
             fmu.display()
         );
     };
-    let shapes_ratio = mesh_damping_ratio.unwrap_or(model.shape_damping_ratio);
-    let place = PairPlacement::new(&model.pair);
-    let dynamics = PmorDynamics::new(&model, &place, model.damping(model.modal_damping_ratio, shapes_ratio), [0.0; 2]);
+    // The instance's dynamics, as the FMU builds it (mesh damper included).
+    let file =
+        ModelFile { guid: String::new(), pair_name: model.pair.name.clone(), model: ModelKind::PmorHertz(model) };
+    let fmu_model = gearfmu::FmuModel::from_model_file(file).map_err(anyhow::Error::msg)?;
+    let gearfmu::dynamics::fmu::Physics::PmorHertz { model, place } = &fmu_model.physics else { unreachable!() };
+    let mut state = gearfmu::fmi2::Model::initial_state(&fmu_model);
+    let zeta = mesh_damping_ratio.unwrap_or(0.0);
+    state.params.mesh_damping_ratio = zeta;
+    let dynamics = fmu_model.pmor(model, place, &state);
     let guess = torque_nm / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
     println!(
-        "{}: linearized at T1 = {torque_nm} N·m, modal damping {} on the eigenmodes, {shapes_ratio} on the shapes",
-        model.pair.name, model.modal_damping_ratio
+        "{}: linearized at T1 = {torque_nm} N·m; modal damping {} on the eigenmodes, {} on the shapes; mesh damper ζ = {zeta} (c = {:.1} N·s/m on k̄ = {:.4e} N/m)",
+        model.pair.name, model.modal_damping_ratio, model.shape_damping_ratio, dynamics.mesh_damping_n_s_per_m, model.mesh_stiffness_n_per_m
     );
     println!("position (pitch of gear 2) | lowest modes: natural frequency |λ|/2π (Hz), damping ratio −Re λ/|λ|");
     for j in 0..positions {

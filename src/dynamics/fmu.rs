@@ -212,16 +212,23 @@ impl GearPairFmu {
     }
 
     /// The PMOR-Hertz dynamics with an instance's parameters: the FE inertia of each gear plus
-    /// the rigid inertia the instance adds at its bore (inertia_i above the FE value), and the
-    /// shape damping ratio from mesh_damping_ratio.
+    /// the rigid inertia the instance adds at its bore (inertia_i above the FE value), the
+    /// build's modal damping, and the mesh damper from mesh_damping_ratio, defined as the lumped
+    /// model's: c = 2ζ√(k̄·m_e), k̄ the pair's mean mesh stiffness, m_e = 1/(r_b1²/J₁ + r_b2²/J₂).
     pub fn pmor<'a>(&'a self, model: &'a PmorModel, place: &'a PairPlacement, s: &GearPairState) -> PmorDynamics<'a> {
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
-        PmorDynamics::new(
+        let p = &s.params;
+        let mut dynamics = PmorDynamics::new(
             model,
             place,
-            model.damping(model.modal_damping_ratio, s.params.mesh_damping_ratio),
-            [s.params.inertia_1_kgm2 - fe[0], s.params.inertia_2_kgm2 - fe[1]],
-        )
+            model.damping(model.modal_damping_ratio, model.shape_damping_ratio),
+            [p.inertia_1_kgm2 - fe[0], p.inertia_2_kgm2 - fe[1]],
+        );
+        let rb = [model.gears[0].base_radius_m, model.gears[1].base_radius_m];
+        let mesh_mass_kg = 1.0 / (rb[0].powi(2) / p.inertia_1_kgm2 + rb[1].powi(2) / p.inertia_2_kgm2);
+        dynamics.mesh_damping_n_s_per_m =
+            2.0 * p.mesh_damping_ratio * (model.mesh_stiffness_n_per_m * mesh_mass_kg).sqrt();
+        dynamics
     }
 
     fn pmor_outputs(&self, s: &GearPairState) -> Result<Option<(PmorOutputs, PmorState)>, String> {
@@ -270,7 +277,7 @@ impl GearPairFmu {
     fn pmor_stability_limit(&self, model: &PmorModel, place: &PairPlacement, s: &GearPairState) -> Result<f64, String> {
         let p = &s.params;
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
-        if p.mesh_damping_ratio == model.shape_damping_ratio && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
+        if p.mesh_damping_ratio == 0.0 && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
             return Ok(model.stability_limit_s);
         }
         let key = [p.inertia_1_kgm2.to_bits(), p.inertia_2_kgm2.to_bits(), p.mesh_damping_ratio.to_bits()];
@@ -424,7 +431,8 @@ impl Model for GearPairFmu {
                 LumpedParameters {
                     inertia_1_kgm2: model.gears[0].polar_inertia_kgm2,
                     inertia_2_kgm2: model.gears[1].polar_inertia_kgm2,
-                    mesh_damping_ratio: model.shape_damping_ratio,
+                    // The paper's model: modal damping only, no mesh damper.
+                    mesh_damping_ratio: 0.0,
                 },
             ),
         };

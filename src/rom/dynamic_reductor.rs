@@ -121,6 +121,21 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
     linear::default_step(&dynamics)
 }
 
+/// The reduced pair's mean tangent mesh stiffness at the reference mesh force, with the build's
+/// damping (a static property: damping does not enter it).
+fn mean_mesh_stiffness(model: &PmorModel, options: &DynamicBuildOptions) -> Result<f64, String> {
+    use crate::contact::mesh_kinematics::PairPlacement;
+    use crate::dynamics::pmor::{linear, PmorDynamics};
+    let place = PairPlacement::new(&model.pair);
+    let dynamics = PmorDynamics::new(
+        model,
+        &place,
+        model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
+        [0.0; 2],
+    );
+    linear::mean_mesh_stiffness(&dynamics, linear::reference_mesh_force_n(&model.pair))
+}
+
 /// The one-tooth rotation P of a nodal field (all nodes, 3 per node) of the structured gear
 /// mesh: (P f)(layer l, sector k) = R(−2π/z)·f(l, k + shift); `shift` = −1 gives P⁻¹ (with
 /// R(+2π/z)). Node numbering is l·z·n_sector + k·n_sector + local (`fe::gear_mesh`).
@@ -527,6 +542,7 @@ pub fn build_dynamic_model(
         interpolation: options.interpolation,
         modal_damping_ratio: options.modal_damping_ratio,
         shape_damping_ratio: options.shape_damping_ratio,
+        mesh_stiffness_n_per_m: 0.0,
         integrator: options.integrator,
         max_step_s: 0.0,
         stability_limit_s: 0.0,
@@ -539,6 +555,8 @@ pub fn build_dynamic_model(
             mesh: format!("{mesh:?}"),
         },
     };
+    progress("the mean mesh stiffness (static equilibria over a pitch)".into());
+    model.mesh_stiffness_n_per_m = mean_mesh_stiffness(&model, options)?;
     progress("linearizing the pair for the integrator step".into());
     let step = integrator_step(&model, options)?;
     model.max_step_s = step.max_step_s;

@@ -124,6 +124,43 @@ pub fn static_equilibrium(
     Err(format!("the static equilibrium at θ₂ = {theta2} rad, τ₁ = {torque1_nm} N·m did not converge"))
 }
 
+/// The mesh force at which the mesh damper's stiffness is taken: 200 N/mm of face width, the
+/// lumped model's reference (`LumpedMesh::reference_force_n`), so both model kinds define the
+/// mesh damping ratio alike.
+pub fn reference_mesh_force_n(pair: &crate::gear::GearPair) -> f64 {
+    200.0e3 * pair.face_width_m
+}
+
+/// Positions over a pitch at which the mean mesh stiffness is sampled.
+const STIFFNESS_POSITIONS: usize = 8;
+
+/// The mean tangent mesh stiffness (N/m) of the reduced pair at the mesh force `force_n`: at
+/// positions spread over a pitch of gear 2, the static transmission error r_b1θ₁ − r_b2θ₂ at
+/// 0.95 and 1.05 × the force (static equilibria of the whole reduced pair: teeth, bodies and
+/// Hertz contact), the force step over the TE step, averaged over the positions — the quantity
+/// the lumped model's mean of ∂F/∂δ is (`MeshLaw::mean_tangent_stiffness`).
+pub fn mean_mesh_stiffness(dynamics: &PmorDynamics, force_n: f64) -> Result<f64, String> {
+    let model = dynamics.model;
+    let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
+    let guess = force_n / (1e11 * model.pair.face_width_m);
+    let mut sum = 0.0;
+    for j in 0..STIFFNESS_POSITIONS {
+        let theta2 = (j as f64 + 0.5) / STIFFNESS_POSITIONS as f64 * model.gears[1].pitch_rad();
+        let te = |force: f64| -> Result<f64, String> {
+            let (s, _) = static_equilibrium(dynamics, theta2, force * rb[0], guess)?;
+            Ok(rb[0] * s.theta[0] - rb[1] * s.theta[1])
+        };
+        let (low, high) = (te(0.95 * force_n)?, te(1.05 * force_n)?);
+        if high <= low {
+            return Err(format!(
+                "the static transmission error does not grow with the load at θ₂ = {theta2} rad ({low:e} → {high:e} m)"
+            ));
+        }
+        sum += 0.1 * force_n / (high - low);
+    }
+    Ok(sum / STIFFNESS_POSITIONS as f64)
+}
+
 /// The Jacobian of the flow at state `s` under constant torques.
 pub fn linearize(dynamics: &PmorDynamics, s: &PmorState, torques: [f64; 2]) -> Result<LinearizedPair, String> {
     let y = dynamics.pack(s);

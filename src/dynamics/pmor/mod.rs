@@ -71,6 +71,12 @@ pub struct PmorDynamics<'a> {
     pub damping: [Damping; 2],
     /// Rigid inertia added at each bore (hub, shaft share), kg·m².
     pub added_inertia_kgm2: [f64; 2],
+    /// The mesh damper (N·s/m): viscous along the line of action while teeth touch, on the
+    /// rigid frames' relative velocity r_b1ω₁ − r_b2ω₂ — the lumped model's c·δ̇. The modal
+    /// damping acts on each coordinate at its own frequency, far above the mesh mode's, and
+    /// leaves that mode almost undamped (`fmu-build linearize`); this is what damps it.
+    /// Zero by default: the paper's model has modal damping only.
+    pub mesh_damping_n_s_per_m: f64,
     /// How the contact force enters the elastic coordinates (the Hertz band by default).
     pub loading: Loading,
     /// The time integrator (the model's choice by default).
@@ -138,6 +144,7 @@ impl<'a> PmorDynamics<'a> {
             place,
             damping,
             added_inertia_kgm2,
+            mesh_damping_n_s_per_m: 0.0,
             loading: Loading::HertzBand,
             integrator: model.integrator,
             gram_cache: Default::default(),
@@ -208,10 +215,15 @@ impl<'a> PmorDynamics<'a> {
             eta: &y[l.q(i) + 1..l.q(i) + l.n_q[i]],
         });
         let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
-        let contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage, self.loading)?;
+        let mut contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage, self.loading)?;
+        // The mesh damper's force along the line of action, and its torques on the two gears.
+        let rb = [self.model.gears[0].base_radius_m, self.model.gears[1].base_radius_m];
+        let loa_velocity = rb[0] * y[l.v(0)] - rb[1] * y[l.v(1)];
+        let damper_n = if contact.pairs_in_contact > 0 { self.mesh_damping_n_s_per_m * loa_velocity } else { 0.0 };
+        let damper_torque = [-rb[0] * damper_n, rb[1] * damper_n];
         let mut dy = vec![0.0; y.len()];
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
-        let mut dissipation = 0.0;
+        let mut dissipation = damper_n * loa_velocity;
         for i in 0..2 {
             let n = l.n_q[i];
             dy[l.q(i)..l.q(i) + n].copy_from_slice(&y[l.v(i)..l.v(i) + n]);
@@ -225,7 +237,7 @@ impl<'a> PmorDynamics<'a> {
                 self.damping[i],
             );
             let mut rhs = terms.force + DVector::from_column_slice(&contact.force[i]);
-            rhs[0] += torques[i];
+            rhs[0] += torques[i] + damper_torque[i];
             let mut mass = terms.mass;
             mass[(0, 0)] += self.added_inertia_kgm2[i];
             out.kinetic_j += 0.5 * self.added_inertia_kgm2[i] * y[l.v(i)].powi(2);
@@ -235,7 +247,11 @@ impl<'a> PmorDynamics<'a> {
             out.elastic_j += terms.elastic_j;
             dissipation += terms.damping_force.iter().zip(&y[l.v(i)..l.v(i) + n]).map(|(f, v)| f * v).sum::<f64>();
             out.damping_force[l.q(i)..l.q(i) + n].copy_from_slice(terms.damping_force.as_slice());
+            out.damping_force[l.q(i)] -= damper_torque[i];
         }
+        // The mesh force the FMU reports is the teeth's whole force, elastic and damping, as
+        // the lumped model's.
+        contact.normal_force_n += damper_n;
         let n = y.len();
         dy[n - 2] = torques[0] * y[l.v(0)] + torques[1] * y[l.v(1)];
         dy[n - 1] = dissipation;

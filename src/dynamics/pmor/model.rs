@@ -160,6 +160,9 @@ pub struct PmorModel {
     /// values, 1 % and 5 %, taken at each coordinate's own frequency: `equations::Damping`).
     pub modal_damping_ratio: f64,
     pub shape_damping_ratio: f64,
+    /// The pair's mean tangent mesh stiffness at the reference mesh force (N/m,
+    /// `linear::mean_mesh_stiffness`): the mesh damper c = 2ζ√(k̄·m_e) is sized on it.
+    pub mesh_stiffness_n_per_m: f64,
     /// The time integrator the FMU steps with (`integrator`).
     pub integrator: Integrator,
     /// The internal step bound the FMU starts with (s): a fraction of the integrator's stability
