@@ -664,10 +664,9 @@ fn angle_forces_against_the_potential(sign: f64) {
 /// at its frequency within 2 %.
 #[test]
 fn torque_step_rings_at_the_linearized_mesh_mode() {
-    use gearfmu::dynamics::pmor::linear::{linearize, static_equilibrium};
+    use gearfmu::dynamics::pmor::linear::static_equilibrium;
     let f = fixture();
     let m = &f.model;
-    let rb = base_radii(m);
     let dynamics = PmorDynamics::new(m, &f.place, m.damping(0.0, 0.0), [0.0; 2]);
     let theta2 = 0.3 * m.gears[1].pitch_rad();
     let torque = 185.0;
