@@ -670,9 +670,10 @@ fn torque_step_rings_at_the_linearized_mesh_mode() {
     let dynamics = PmorDynamics::new(m, &f.place, m.damping(0.0, 0.0), [0.0; 2]);
     let theta2 = 0.3 * m.gears[1].pitch_rad();
     let torque = 185.0;
-    let (s0, t2_0) = static_equilibrium(&dynamics, theta2, torque, 15e-6).unwrap();
+    let (s0, _) = static_equilibrium(&dynamics, theta2, torque, 15e-6).unwrap();
     let (s1, t2_1) = static_equilibrium(&dynamics, theta2, 1.02 * torque, te(m, &s0)).unwrap();
-    let (mesh_mode, share) = mesh_mode_of_a_load_step(f, &dynamics, &s0, &s1, [torque, t2_0]);
+    let mode = gearfmu::dynamics::pmor::linear::mesh_mode(&dynamics, theta2, torque).unwrap();
+    let (mesh_mode, share) = (mode.frequency_hz, mode.dte_share);
     // The nonlinear run.
     let h = 0.5 * m.max_step_s;
     let steps = (20e-3 / h) as usize;
@@ -704,54 +705,6 @@ fn torque_step_rings_at_the_linearized_mesh_mode() {
     );
     assert!((peak / mesh_mode - 1.0).abs() < 0.02);
     assert!(share > 0.5, "one mode must carry the DTE for the comparison to mean anything");
-}
-
-/// The mesh mode of the pair linearized at the static state s0 (torques): the mode that carries
-/// most of the DTE's response to the load step s0 → s1 (frequency in Hz, its share of the modal
-/// DTE amplitudes). Linear theory splits the response into modes, a_k = d·φ_k·(ψ_kᵀΔq)/(ψ_kᵀφ_k),
-/// φ, ψ the right and left eigenvectors of −∂q̈/∂q (inverse iteration on each eigenvalue), d the
-/// TE row and Δq the static change.
-fn mesh_mode_of_a_load_step(
-    f: &Fixture,
-    dynamics: &PmorDynamics,
-    s0: &PmorState,
-    s1: &PmorState,
-    torques: [f64; 2],
-) -> (f64, f64) {
-    let m = &f.model;
-    let rb = base_radii(m);
-    let lin = gearfmu::dynamics::pmor::linear::linearize(dynamics, s0, torques).unwrap();
-    let a = lin.stiffness_block();
-    let n = lin.coordinates;
-    let (y0, y1) = (dynamics.pack(&s0), dynamics.pack(&s1));
-    let dq = nalgebra::DVector::from_iterator(n, (0..n).map(|k| y1[k] - y0[k]));
-    // The TE row: r_b1 on θ₁, −r_b2 on θ₂.
-    let mut d = nalgebra::DVector::zeros(n);
-    d[0] = rb[0];
-    d[1 + m.gears[0].elastic_size()] = -rb[1];
-    // Modal DTE amplitudes by inverse iteration on each eigenvalue (right and left vectors).
-    let mut modes: Vec<(f64, f64)> = Vec::new();
-    for lambda in a.complex_eigenvalues().iter() {
-        if lambda.re < 1.0 {
-            continue; // the rigid rotation
-        }
-        let shift = lambda.re * (1.0 + 1e-9);
-        let vector = |m: &nalgebra::DMatrix<f64>| {
-            let lu = (m - nalgebra::DMatrix::identity(n, n) * shift).lu();
-            let mut x = nalgebra::DVector::from_element(n, 1.0);
-            for _ in 0..3 {
-                x = lu.solve(&x).unwrap();
-                x /= x.norm();
-            }
-            x
-        };
-        let (phi, psi) = (vector(&a), vector(&a.transpose()));
-        let amplitude = d.dot(&phi) * psi.dot(&dq) / psi.dot(&phi);
-        modes.push((lambda.re.sqrt() / (2.0 * PI), amplitude.abs()));
-    }
-    let mesh_mode = modes.iter().cloned().fold((0.0, 0.0), |b, m| if m.1 > b.1 { m } else { b });
-    let total: f64 = modes.iter().map(|m| m.1).sum();
-    (mesh_mode.0, mesh_mode.1 / total)
 }
 
 /// Validity (issue 12, item 4, the dynamics' side): the pair pressed ever deeper at rest (η = 0,
@@ -791,7 +744,6 @@ fn contact_beyond_the_half_width_rule_is_an_error() {
 /// the mode's motion that is rigid relative rotation), ω̄ = √(k̄/m_e): close to ζ, not equal.
 #[test]
 fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
-    use gearfmu::dynamics::pmor::linear::{linearize, static_equilibrium};
     let f = fixture();
     let m = &f.model;
     let rb = base_radii(m);
@@ -804,34 +756,20 @@ fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
         d.mesh_damping_n_s_per_m = 2.0 * zeta * (m.mesh_stiffness_n_per_m * mesh_mass).sqrt();
         d
     };
-    let bare = dynamics(0.0);
-    let (s0, t2_0) = static_equilibrium(&bare, theta2, torque, 15e-6).unwrap();
-    let (s1, _) = static_equilibrium(&bare, theta2, 1.02 * torque, te(m, &s0)).unwrap();
-    let (mesh_hz, share) = mesh_mode_of_a_load_step(f, &bare, &s0, &s1, [torque, t2_0]);
-    // The flow's eigenvalue at the mesh mode: (natural frequency, damping ratio).
-    let mesh_mode = |d: &PmorDynamics| -> (f64, f64) {
-        linearize(d, &s0, [torque, t2_0])
-            .unwrap()
-            .flow_eigenvalues()
-            .into_iter()
-            .filter(|l| l.im > 0.0)
-            .map(|l| (l.norm() / (2.0 * PI), -l.re / l.norm()))
-            .min_by(|a, b| (a.0 - mesh_hz).abs().total_cmp(&(b.0 - mesh_hz).abs()))
-            .unwrap()
-    };
+    let mesh_mode = |d: &PmorDynamics| linear::mesh_mode(d, theta2, torque).unwrap();
     let zeta = 0.1;
-    let (without, with) = (mesh_mode(&bare), mesh_mode(&dynamics(zeta)));
+    let (without, with) = (mesh_mode(&dynamics(0.0)), mesh_mode(&dynamics(zeta)));
     let reference_hz = (m.mesh_stiffness_n_per_m / mesh_mass).sqrt() / (2.0 * PI);
     eprintln!(
-        "mesh mode {mesh_hz:.0} Hz ({:.0} % of the load step's DTE; 2-DOF √(k̄/m_e)/2π {reference_hz:.0} Hz): ζ {:.4} without the damper, {:.4} with ζ = {zeta} ({:.0} Hz)",
-        100.0 * share,
-        without.1,
-        with.1,
-        with.0
+        "mesh mode {:.0} Hz ({:.0} % of a load step's DTE; 2-DOF √(k̄/m_e)/2π {reference_hz:.0} Hz): ζ {:.4} without the damper, {:.4} with ζ = {zeta}",
+        without.frequency_hz,
+        100.0 * without.dte_share,
+        without.damping_ratio,
+        with.damping_ratio
     );
-    assert!((without.0 / mesh_hz - 1.0).abs() < 0.01, "the flow's mode is the mesh mode");
-    assert!(without.1 < 0.01, "without the damper the mesh mode is lightly damped");
-    let added = with.1 - without.1;
+    assert!(without.dte_share > 0.5, "one mode carries the DTE");
+    assert!(without.damping_ratio < 0.01, "without the damper the mesh mode is lightly damped");
+    let added = with.damping_ratio - without.damping_ratio;
     assert!((0.5 * zeta..1.2 * zeta).contains(&added), "the damper adds ζ {added:.4} to the mesh mode, asked {zeta}");
 }
 

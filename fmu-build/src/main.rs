@@ -733,12 +733,22 @@ fn linearize_command(
         "{}: linearized at T1 = {torque_nm} N·m; modal damping {} on the eigenmodes, {} on the shapes; mesh damper ζ = {zeta} (c = {:.1} N·s/m on k̄ = {:.4e} N/m)",
         model.pair.name, model.modal_damping_ratio, model.shape_damping_ratio, dynamics.mesh_damping_n_s_per_m, model.mesh_stiffness_n_per_m
     );
-    println!("position (pitch of gear 2) | lowest modes: natural frequency |λ|/2π (Hz), damping ratio −Re λ/|λ|");
+    let rb = [model.gears[0].base_radius_m, model.gears[1].base_radius_m];
+    let inertia = [state.params.inertia_1_kgm2, state.params.inertia_2_kgm2];
+    let mesh_mass_kg = 1.0 / (rb[0].powi(2) / inertia[0] + rb[1].powi(2) / inertia[1]);
+    println!(
+        "rigid gears on the mean mesh stiffness (the 2-DOF estimate): √(k̄/m_e)/2π = {:.0} Hz (m_e = {mesh_mass_kg:.4} kg)",
+        (model.mesh_stiffness_n_per_m / mesh_mass_kg).sqrt() / (2.0 * std::f64::consts::PI)
+    );
+    println!("position (pitch of gear 2) | mesh mode (its share of a load step's DTE) | lowest modes: |λ|/2π (Hz), ζ = −Re λ/|λ|");
+    let mut omega_squared = 0.0;
     for j in 0..positions {
         let share = (j as f64 + 0.5) / positions as f64;
+        let theta2 = share * model.gears[1].pitch_rad();
+        let mesh = linear::mesh_mode(&dynamics, theta2, torque_nm).map_err(anyhow::Error::msg)?;
+        omega_squared += mesh.frequency_hz.powi(2) / positions as f64;
         let (state, torque2) =
-            linear::static_equilibrium(&dynamics, share * model.gears[1].pitch_rad(), torque_nm, guess)
-                .map_err(anyhow::Error::msg)?;
+            linear::static_equilibrium(&dynamics, theta2, torque_nm, guess).map_err(anyhow::Error::msg)?;
         let lin = linear::linearize(&dynamics, &state, [torque_nm, torque2]).map_err(anyhow::Error::msg)?;
         // Oscillating modes, one of each conjugate pair; the rigid rotation (λ ≈ 0) left out.
         let mut modes: Vec<(f64, f64)> = lin
@@ -749,8 +759,16 @@ fn linearize_command(
             .collect();
         modes.sort_by(|a, b| a.0.total_cmp(&b.0));
         let text: Vec<String> = modes.iter().take(count).map(|(f, z)| format!("{f:.0} Hz ζ {z:.4}")).collect();
-        println!("{share:.3} | {}", text.join(", "));
+        println!(
+            "{share:.3} | {:.0} Hz ζ {:.4} ({:.0} %) | {}",
+            mesh.frequency_hz,
+            mesh.damping_ratio,
+            100.0 * mesh.dte_share,
+            text.join(", ")
+        );
     }
+    // The mesh stiffness varies over the pitch; its mean (over positions) is the mean of ω².
+    println!("mesh mode on the mean mesh stiffness, √(mean ω²)/2π over the positions: {:.0} Hz", omega_squared.sqrt());
     Ok(())
 }
 

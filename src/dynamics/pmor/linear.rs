@@ -161,6 +161,74 @@ pub fn mean_mesh_stiffness(dynamics: &PmorDynamics, force_n: f64) -> Result<f64,
     Ok(sum / STIFFNESS_POSITIONS as f64)
 }
 
+/// The mesh mode of the reduced pair at one mesh position.
+#[derive(Debug, Clone, Copy)]
+pub struct MeshMode {
+    /// Undamped natural frequency (Hz), √λ of −∂q̈/∂q.
+    pub frequency_hz: f64,
+    /// −Re μ/|μ| of the damped flow's eigenvalue μ nearest it.
+    pub damping_ratio: f64,
+    /// Its share of the DTE's modal response to a load step (the mode "is" the mesh mode when
+    /// one mode carries most of it).
+    pub dte_share: f64,
+}
+
+/// The mesh mode with gear 2 at θ₂ under T₁: the mode that carries most of the DTE's response
+/// to a small load step (T₁ → 1.02·T₁, both static equilibria). Linear theory splits that
+/// response into modes, a_k = d·φ_k·(ψ_kᵀΔq)/(ψ_kᵀφ_k), φ, ψ the right and left eigenvectors of
+/// −∂q̈/∂q (inverse iteration on each eigenvalue), d the TE row r_b1θ₁ − r_b2θ₂ and Δq the static
+/// change (`pmor_dynamics::torque_step_rings_at_the_linearized_mesh_mode` checks it against the
+/// spectrum of a nonlinear run).
+pub fn mesh_mode(dynamics: &PmorDynamics, theta2: f64, torque1_nm: f64) -> Result<MeshMode, String> {
+    let model = dynamics.model;
+    let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
+    let guess = torque1_nm / rb[0] / (1e11 * model.pair.face_width_m);
+    let (s0, t2) = static_equilibrium(dynamics, theta2, torque1_nm, guess)?;
+    let te0 = rb[0] * s0.theta[0] - rb[1] * s0.theta[1];
+    let (s1, _) = static_equilibrium(dynamics, theta2, 1.02 * torque1_nm, te0)?;
+    let lin = linearize(dynamics, &s0, [torque1_nm, t2])?;
+    let a = lin.stiffness_block();
+    let n = lin.coordinates;
+    let (y0, y1) = (dynamics.pack(&s0), dynamics.pack(&s1));
+    let dq = DVector::from_iterator(n, (0..n).map(|k| y1[k] - y0[k]));
+    let mut d = DVector::zeros(n);
+    d[0] = rb[0];
+    d[1 + model.gears[0].elastic_size()] = -rb[1];
+    let mut modes: Vec<(f64, f64)> = Vec::new();
+    for lambda in a.complex_eigenvalues().iter() {
+        if lambda.re < 1.0 {
+            continue; // the rigid rotation
+        }
+        let shift = lambda.re * (1.0 + 1e-9);
+        let vector = |m: &DMatrix<f64>| -> Result<DVector<f64>, String> {
+            let lu = (m - DMatrix::identity(n, n) * shift).lu();
+            let mut x = DVector::from_element(n, 1.0);
+            for _ in 0..3 {
+                x = lu.solve(&x).ok_or("inverse iteration: singular shift")?;
+                x /= x.norm();
+            }
+            Ok(x)
+        };
+        let (phi, psi) = (vector(&a)?, vector(&a.transpose())?);
+        let amplitude = d.dot(&phi) * psi.dot(&dq) / psi.dot(&phi);
+        modes.push((lambda.re.sqrt() / (2.0 * std::f64::consts::PI), amplitude.abs()));
+    }
+    let total: f64 = modes.iter().map(|m| m.1).sum();
+    let (frequency_hz, amplitude) =
+        modes.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1)).ok_or("the pair has no oscillating mode")?;
+    let damping_ratio = lin
+        .flow_eigenvalues()
+        .into_iter()
+        .filter(|l| l.im > 0.0)
+        .min_by(|a, b| {
+            let f = |l: &Complex<f64>| (l.norm() / (2.0 * std::f64::consts::PI) - frequency_hz).abs();
+            f(a).total_cmp(&f(b))
+        })
+        .map(|l| -l.re / l.norm())
+        .ok_or("the flow has no oscillating eigenvalue")?;
+    Ok(MeshMode { frequency_hz, damping_ratio, dte_share: amplitude / total })
+}
+
 /// The Jacobian of the flow at state `s` under constant torques.
 pub fn linearize(dynamics: &PmorDynamics, s: &PmorState, torques: [f64; 2]) -> Result<LinearizedPair, String> {
     let y = dynamics.pack(s);
