@@ -121,6 +121,9 @@ def create(path: Path, grid: Grid, pair: PairFacts, recording: Recording, fmu_na
         "description": "the same with k = reference_mesh_stiffness_n_per_m (mean of the mesh_stiffness output)"})
     data["secant_mesh_natural_frequency_hz"] = (ref_dims, np.full(ref_shape, np.nan), {
         "description": "the same with k = (T1/r_b1) / reference_dte_mean_m (static force over mean DTE)"})
+    data["linearized_mesh_frequency_hz"] = (ref_dims, np.full(ref_shape, np.nan), {
+        "description": "PMOR-Hertz: the reduced pair's mesh mode linearized over a pitch, sqrt(mean omega^2)/(2 pi) "
+                       "(fmu-build linearize): the elastic gears' own linearized model"})
     data["reference_status"] = (ref_dims, np.full(ref_shape, PENDING, np.int8), {"description": "0 pending, 1 done, 2 failed"})
     data["reference_error"] = (ref_dims, np.full(ref_shape, "", f"<U{ERROR_CHARS}"), {})
     ds = xr.Dataset(data, coords={**grid.coords(), "mesh_order": np.asarray(MESH_ORDERS)})
@@ -129,7 +132,8 @@ def create(path: Path, grid: Grid, pair: PairFacts, recording: Recording, fmu_na
         # Small oscillations feel the tangent stiffness; the lumped FMU outputs the mesh's. PMOR-Hertz's
         # mesh_stiffness is its Hertz contacts' alone, so there the mean DTE gives the (secant) stiffness.
         "natural_frequency_stiffness": ("tangent: mean of the mesh_stiffness output" if pair.mesh_stiffness_is_whole_mesh
-                                        else "secant: static mesh force / mean DTE"),
+                                        else "linearized: the reduced pair's mesh mode (fmu-build linearize), else "
+                                             "secant: static mesh force / mean DTE"),
         "teeth_1": pair.teeth_1, "teeth_2": pair.teeth_2,
         "base_radius_1_m": pair.base_radius_1_m, "base_radius_2_m": pair.base_radius_2_m,
         "parameter_start_values": json.dumps(pair.start_values),
@@ -205,11 +209,23 @@ class Writer:
         self._set("tangent_mesh_natural_frequency_hz", done_at, tangent)
         self._set("secant_mesh_natural_frequency_hz", done_at, secant)
         use_tangent = self.attrs["natural_frequency_stiffness"].startswith("tangent")
-        self._set("mesh_natural_frequency_hz", done_at, tangent if use_tangent else secant)
+        linearized = self.arrays["linearized_mesh_frequency_hz"]
+        self._set("mesh_natural_frequency_hz", done_at,
+                  tangent if use_tangent else
+                  [lin if np.isfinite(lin := float(linearized[i])) else sec for i, sec in zip(done_at, secant)])
         self._set("reference_error", done_at, [""] * len(done))
         self._set("reference_error", failed_at, [r["error"][:ERROR_CHARS] for _, r in failed])
         self._set("reference_status", done_at, [DONE] * len(done))
         self._set("reference_status", failed_at, [FAILED] * len(failed))
+
+
+    def write_linearized(self, frequencies: dict) -> None:
+        """{reference index: the linearized mesh frequency (Hz)}: stored, and taken as the f_n of
+        those references (already written or not)."""
+        indices = list(frequencies)
+        self._set("linearized_mesh_frequency_hz", indices, [frequencies[i] for i in indices])
+        done = [i for i in indices if self.arrays["reference_status"][i] == DONE]
+        self._set("mesh_natural_frequency_hz", done, [frequencies[i] for i in done])
 
 
 def load(path: Path) -> xr.Dataset:

@@ -88,11 +88,34 @@ def run_chunk(fmu_bytes: bytes, sha256: str, grid: Grid, tasks: list, recording:
 
 def build_fmu(spec: Path, model: str = "lumped", out_dir: Path | None = None) -> Path:
     """A spec (.toml) → an .fmu, with the repository's fmu-build (on PATH or in target/release)."""
-    repo = Path(__file__).resolve().parents[2]
-    tool = shutil.which("fmu-build") or str(repo / "target" / "release" / "fmu-build")
+    tool = _fmu_build()
     out = Path(out_dir or tempfile.mkdtemp(prefix="gearfmu-build-")) / f"{Path(spec).stem}-{model}.fmu"
     subprocess.run([tool, "build", str(spec), "-o", str(out), "--model", model], check=True)
     return out
+
+
+def _fmu_build() -> str:
+    repo = Path(__file__).resolve().parents[2]
+    return shutil.which("fmu-build") or str(repo / "target" / "release" / "fmu-build")
+
+
+def linearized_mesh_frequencies(fmu: Path, grid: Grid) -> dict:
+    """PMOR-Hertz: {reference index: its mesh mode linearized over a pitch (Hz)} from
+    `fmu-build linearize` — the elastic gears' own linearized model, which the rigid two-inertia
+    formula on the mean stiffness misses (their rims and webs move with the teeth). Only for
+    grids that keep the inertias at their defaults; {} where fmu-build is not at hand."""
+    tool = _fmu_build()
+    if not Path(tool).exists() or {"inertia_1", "inertia_2"} & set(grid.parameters):
+        return {}
+    result = {}
+    for index in np.ndindex(*grid.shape[1:]):
+        _, torque, parameters = grid.point((None, *index))
+        command = [tool, "linearize", str(fmu), "--torque-nm", repr(torque), "-n", "0", "--positions", "32"]
+        if "mesh_damping_ratio" in parameters:
+            command += ["--mesh-damping-ratio", repr(parameters["mesh_damping_ratio"])]
+        out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+        result[tuple(int(i) for i in index)] = float(out.strip().splitlines()[-1].split(":")[-1].split()[0])
+    return result
 
 
 def _chunks(tasks: list, chunk_size: int) -> list[list]:
@@ -131,6 +154,8 @@ def sweep(fmu: str | Path, grid: Grid, out: str | Path, *, client=None, schedule
     # References first: they are few, and the plots need them whatever else finishes.
     tasks = [("reference", index) for index in references] + [("point", index) for index in points]
     writer = store.Writer(out)
+    if not pair.mesh_stiffness_is_whole_mesh:
+        writer.write_linearized(linearized_mesh_frequencies(fmu, grid))
 
     def write(results: list) -> None:
         writer.write_references([(index, grid.point((None, *index))[2], result)
