@@ -1,9 +1,11 @@
 //! Fuzzing (issue 13, item 3) with proptest: the spec parser, the model-file decoder, the
 //! serialized-FMU-state decoder, and random FMI call sequences checked against an independent
 //! model of the FMI 2.0 Co-Simulation state machine. Every target asserts "no panic, and a clear
-//! Err where the input is bad"; the call sequences also assert every status and phase.
+//! Err where the input is bad"; the call sequences also assert every status and phase. The three
+//! FMU targets run on the lumped FMU and again on the PMOR-Hertz one (`*_pmor_hertz`).
 //!
-//! Short run (CI): `cargo test --release --test fuzz` (2000 / 500 / 500 / 500 cases, about 2 s).
+//! Short run (CI): `cargo test --release --test fuzz` (spec 2000, lumped 500 each, PMOR-Hertz
+//! 100–300 cases; about 6 s).
 //! Long run: `GEARFMU_FUZZ_SECONDS=600 cargo test --release --test fuzz -- --test-threads=1 --nocapture`
 //! repeats batches of `PROPTEST_CASES` (default below) per target, each with a fresh random
 //! seed, until the budget is spent, and prints cases and cases per second per target.
