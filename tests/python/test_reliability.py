@@ -194,7 +194,10 @@ def test_serialized_state_refuses_flips_trailing_bytes_and_other_fmus(fmi_case, 
 ])
 def test_restored_parameters_are_revalidated(fmi_case, make_slave, log_capture, parameter, bad, reason):
     name = f"revalidate_{fmi_case.name}_{parameter}"
-    slave = make_slave(fmi_case, name, callbacks=log_capture.callbacks, logging_on=True)
+    # A value found once in the payload: the PMOR-Hertz FMU's default mesh_damping_ratio is 0,
+    # whose eight zero bytes occur all over it.
+    parameters = {"mesh_damping_ratio": 0.0123} if parameter == "mesh_damping_ratio" else None
+    slave = make_slave(fmi_case, name, callbacks=log_capture.callbacks, logging_on=True, parameters=parameters)
     t = _drive(slave, 0.0, 5)
     good = slave.fmu.getFMUstate()
     blob = slave.fmu.serializeFMUstate(good)
