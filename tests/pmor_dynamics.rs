@@ -746,20 +746,18 @@ fn contact_beyond_the_half_width_rule_is_an_error() {
 fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
     let f = fixture();
     let m = &f.model;
-    let rb = base_radii(m);
     let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
-    let mesh_mass = 1.0 / (rb[0].powi(2) / inertia[0] + rb[1].powi(2) / inertia[1]);
     let torque = 185.0;
     let theta2 = 0.3 * m.gears[1].pitch_rad();
     let dynamics = |zeta: f64| {
         let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
-        d.mesh_damping_n_s_per_m = 2.0 * zeta * (m.mesh_stiffness_n_per_m * mesh_mass).sqrt();
+        d.mesh_damping_n_s_per_m = m.mesh_damper_n_s_per_m(zeta, inertia);
         d
     };
     let mesh_mode = |d: &PmorDynamics| linear::mesh_mode(d, theta2, torque).unwrap();
     let zeta = 0.1;
     let (without, with) = (mesh_mode(&dynamics(0.0)), mesh_mode(&dynamics(zeta)));
-    let reference_hz = (m.mesh_stiffness_n_per_m / mesh_mass).sqrt() / (2.0 * PI);
+    let reference_hz = (m.mesh_stiffness_n_per_m / m.mesh_mass_kg(inertia)).sqrt() / (2.0 * PI);
     eprintln!(
         "mesh mode {:.0} Hz ({:.0} % of a load step's DTE; 2-DOF √(k̄/m_e)/2π {reference_hz:.0} Hz): ζ {:.4} without the damper, {:.4} with ζ = {zeta}",
         without.frequency_hz,
@@ -783,8 +781,7 @@ fn velocity_verlet_books_the_mesh_damper_in_the_energy_balance() {
     let (mut verlet, undamped_h) = verlet_at_its_default_step(f);
     let rb = base_radii(m);
     let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
-    let mesh_mass = 1.0 / (rb[0].powi(2) / inertia[0] + rb[1].powi(2) / inertia[1]);
-    verlet.mesh_damping_n_s_per_m = 2.0 * 0.3 * (m.mesh_stiffness_n_per_m * mesh_mass).sqrt();
+    verlet.mesh_damping_n_s_per_m = m.mesh_damper_n_s_per_m(0.3, inertia);
     // The damper damps the rigid rotations' fast modes too: the step follows the damped pair
     // (as the FMU's stability check does for a mesh_damping_ratio other than the build's).
     let h = linear::default_step(&verlet).unwrap().max_step_s;

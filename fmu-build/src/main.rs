@@ -733,9 +733,7 @@ fn linearize_command(
         "{}: linearized at T1 = {torque_nm} N·m; modal damping {} on the eigenmodes, {} on the shapes; mesh damper ζ = {zeta} (c = {:.1} N·s/m on k̄ = {:.4e} N/m)",
         model.pair.name, model.modal_damping_ratio, model.shape_damping_ratio, dynamics.mesh_damping_n_s_per_m, model.mesh_stiffness_n_per_m
     );
-    let rb = [model.gears[0].base_radius_m, model.gears[1].base_radius_m];
-    let inertia = [state.params.inertia_1_kgm2, state.params.inertia_2_kgm2];
-    let mesh_mass_kg = 1.0 / (rb[0].powi(2) / inertia[0] + rb[1].powi(2) / inertia[1]);
+    let mesh_mass_kg = model.mesh_mass_kg([state.params.inertia_1_kgm2, state.params.inertia_2_kgm2]);
     println!(
         "rigid gears on the mean mesh stiffness (the 2-DOF estimate): √(k̄/m_e)/2π = {:.0} Hz (m_e = {mesh_mass_kg:.4} kg)",
         (model.mesh_stiffness_n_per_m / mesh_mass_kg).sqrt() / (2.0 * std::f64::consts::PI)

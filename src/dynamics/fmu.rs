@@ -224,10 +224,8 @@ impl GearPairFmu {
             model.damping(model.modal_damping_ratio, model.shape_damping_ratio),
             [p.inertia_1_kgm2 - fe[0], p.inertia_2_kgm2 - fe[1]],
         );
-        let rb = [model.gears[0].base_radius_m, model.gears[1].base_radius_m];
-        let mesh_mass_kg = 1.0 / (rb[0].powi(2) / p.inertia_1_kgm2 + rb[1].powi(2) / p.inertia_2_kgm2);
         dynamics.mesh_damping_n_s_per_m =
-            2.0 * p.mesh_damping_ratio * (model.mesh_stiffness_n_per_m * mesh_mass_kg).sqrt();
+            model.mesh_damper_n_s_per_m(p.mesh_damping_ratio, [p.inertia_1_kgm2, p.inertia_2_kgm2]);
         dynamics
     }
 

@@ -92,6 +92,18 @@ impl PmorModel {
         [Damping { modes_ratio: modal_ratio, shapes_ratio: shape_ratio }; 2]
     }
 
+    /// The equivalent mesh mass m_e = 1/(r_b1²/J₁ + r_b2²/J₂) (kg) with the gears' inertias J.
+    pub fn mesh_mass_kg(&self, inertia_kgm2: [f64; 2]) -> f64 {
+        let rb = [self.gears[0].base_radius_m, self.gears[1].base_radius_m];
+        1.0 / (rb[0].powi(2) / inertia_kgm2[0] + rb[1].powi(2) / inertia_kgm2[1])
+    }
+
+    /// The mesh damper's coefficient for a damping ratio ζ of the mesh mode, defined as the lumped
+    /// model's: c = 2ζ√(k̄·m_e) (N·s/m).
+    pub fn mesh_damper_n_s_per_m(&self, zeta: f64, inertia_kgm2: [f64; 2]) -> f64 {
+        2.0 * zeta * (self.mesh_stiffness_n_per_m * self.mesh_mass_kg(inertia_kgm2)).sqrt()
+    }
+
     /// The state at rest-in-frame (η = 0) at given angles and speeds.
     pub fn initial_state(&self, theta: [f64; 2], omega: [f64; 2]) -> PmorState {
         let mut s = PmorState {
