@@ -17,7 +17,7 @@ use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh, MeshSpec, ProfileGrading};
 use gearfmu::fe::hex8::Formulation;
 use gearfmu::fe::{eigen, vtk};
-use gearfmu::gear::{GearPair, PairSpec};
+use gearfmu::gear::{sig, GearPair, PairSpec};
 use gearfmu::interface;
 use gearfmu::model_file::{ModelFile, ModelKind};
 use gearfmu::rom::sweep::{Method, ReducedPair};
@@ -41,30 +41,33 @@ enum ModelChoice {
     Lumped,
 }
 
-/// Options of the PMOR-Hertz build (`fmu-build build --model pmor-hertz`).
+/// Options of the PMOR-Hertz build (`fmu-build build --model pmor-hertz`). The defaults that depend
+/// on the pair (ROM torque, depth) follow from the spec: see `resolve`.
 #[derive(clap::Args, Clone)]
 struct RomOptions {
     /// Fixed-bore eigenmodes per gear n_k (raised to the end of a cluster of the cyclic spectrum).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = count::<1, 200>)]
     modes: usize,
     /// Angular samples of the global contact shapes per mesh cycle n_θ.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = count::<4, 400>)]
     angles: usize,
     /// Torque levels on gear 1 of the static analyses (N·m), comma-separated: n_t shapes per
-    /// sample. One level by default: PMOR-Hertz's global shapes are nearly proportional to the
-    /// load, and levels whose shapes coincide are refused (a singular mass matrix).
-    #[arg(long, value_delimiter = ',', default_value = "250")]
-    rom_torques_nm: Vec<f64>,
+    /// sample. Default: the spec's operating torque (`[operating] torque_nm`, else the pair's
+    /// rated torque). PMOR-Hertz's global shapes are nearly proportional to the load, and levels
+    /// whose shapes coincide are refused (a singular mass matrix).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive_number)]
+    rom_torques_nm: Option<Vec<f64>>,
     /// Load-sharing shapes per sample and flank beside the static ones (`rom::sharing`): they
     /// let the pairs in mesh share a dynamic load differently from the static split.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = count::<0, 8>)]
     sharing_shapes: usize,
-    /// Depth h (mm) of the partial models and of the Hertz approach.
-    #[arg(long, default_value_t = gearfmu::rom::reductor::DEFAULT_CONTACT_DEPTH_M * 1e3)]
-    depth_mm: f64,
-    /// Share of the deformation energy the SVD of the attachment modes keeps (default: chosen by
-    /// measured accuracy, `rom::svd::DEFAULT_P_EN`).
-    #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN)]
+    /// Depth h (mm) of the partial models and of the Hertz approach. Default: half the normal
+    /// module (`rom::reductor::contact_depth_m`; 3 mm on the Kurokawa pairs).
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_number)]
+    depth_mm: Option<f64>,
+    /// Share of the deformation energy the SVD of the attachment modes keeps, in (0, 1] (default:
+    /// chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`).
+    #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN, allow_negative_numbers = true, value_parser = energy_share)]
     p_en: f64,
     /// Interpolation of the shapes in the gear angle.
     #[arg(long, value_enum, default_value = "catmull-rom")]
@@ -72,6 +75,46 @@ struct RomOptions {
     /// The FMU's time integrator (its default max_step is 0.6 of this one's stability limit).
     #[arg(long, value_enum, default_value = "verlet")]
     integrator: IntegratorChoice,
+}
+
+/// A count in [LO, HI] (a value outside is refused with the range, before any work).
+fn count<const LO: usize, const HI: usize>(text: &str) -> Result<usize, String> {
+    let n: usize = text.trim().parse().map_err(|_| format!("`{text}` is not a whole number"))?;
+    if (LO..=HI).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("must be in {LO}..={HI}, got {n}"))
+    }
+}
+
+/// A positive, finite number (a torque, a length, a time).
+fn positive_number(text: &str) -> Result<f64, String> {
+    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a positive finite number, got {}", gearfmu::gear::sig(v)))
+    }
+}
+
+/// A share of energy in (0, 1].
+fn energy_share(text: &str) -> Result<f64, String> {
+    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be in (0, 1] (a share of the deformation energy), got {}", gearfmu::gear::sig(v)))
+    }
+}
+
+/// A damping ratio in [0, 1).
+fn damping_ratio(text: &str) -> Result<f64, String> {
+    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if (0.0..1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("must be in [0, 1) (a fraction of critical damping), got {}", gearfmu::gear::sig(v)))
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -138,7 +181,7 @@ enum Command {
     /// Lowest natural frequencies (Hz) of each gear with the bore clamped.
     Modes {
         spec: PathBuf,
-        #[arg(short = 'n', long, default_value_t = 10)]
+        #[arg(short = 'n', long, default_value_t = 10, value_parser = count::<1, 500>)]
         count: usize,
         #[command(flatten)]
         resolution: Resolution,
@@ -151,37 +194,41 @@ enum Command {
     /// speed sweep's resonances are read against.
     Linearize {
         fmu: PathBuf,
-        /// Torque on gear 1 (N·m).
-        #[arg(long, default_value_t = 185.0)]
-        torque_nm: f64,
-        /// The instance's mesh_damping_ratio (the mesh damper along the line of action); default 0.
-        #[arg(long)]
+        /// Torque on gear 1 (N·m). Default: the operating torque the FMU was built for.
+        #[arg(long, allow_negative_numbers = true, value_parser = positive_number)]
+        torque_nm: Option<f64>,
+        /// The instance's mesh_damping_ratio (the mesh damper along the line of action); default:
+        /// the FMU's start value (the spec's mounting.mesh_damping_ratio).
+        #[arg(long, allow_negative_numbers = true, value_parser = damping_ratio)]
         mesh_damping_ratio: Option<f64>,
         /// Mesh positions over one pitch of gear 2.
-        #[arg(long, default_value_t = 4)]
+        #[arg(long, default_value_t = 4, value_parser = count::<1, 1000>)]
         positions: usize,
         /// Modes printed per position.
-        #[arg(short = 'n', long, default_value_t = 4)]
+        #[arg(short = 'n', long, default_value_t = 4, value_parser = count::<0, 1000>)]
         count: usize,
     },
     /// Static transmission error: gear 2 held at N angles over P pitches, torque T₁ on gear 1.
     Ste {
         spec: PathBuf,
-        /// Torques on gear 1 (N·m), comma-separated.
-        #[arg(long, value_delimiter = ',', required = true)]
-        torque_nm: Vec<f64>,
-        #[arg(long, default_value_t = 41)]
+        /// Torques on gear 1 (N·m), comma-separated. Default: the spec's operating torque.
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive_number)]
+        torque_nm: Option<Vec<f64>>,
+        /// Positions of gear 2 over the pitches.
+        #[arg(long, default_value_t = 41, value_parser = count::<1, 100000>)]
         angles: usize,
-        #[arg(long, default_value_t = 1.0)]
+        /// Pitches of gear 2 the positions span.
+        #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = positive_number)]
         pitches: f64,
         #[arg(long, value_enum, default_value = "pmor-hertz")]
         method: StaticMethod,
-        /// PMOR-Hertz: depth h (mm) of the partial model and of the Hertz approach.
-        #[arg(long, default_value_t = gearfmu::rom::reductor::DEFAULT_CONTACT_DEPTH_M * 1e3)]
-        depth_mm: f64,
-        /// PMOR-Hertz: share of the deformation energy the SVD keeps (Algorithm 1; default:
-        /// chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`, not the paper's 0.99).
-        #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN)]
+        /// PMOR-Hertz: depth h (mm) of the partial model and of the Hertz approach (default: half
+        /// the normal module).
+        #[arg(long, allow_negative_numbers = true, value_parser = positive_number)]
+        depth_mm: Option<f64>,
+        /// PMOR-Hertz: share of the deformation energy the SVD keeps, in (0, 1] (Algorithm 1;
+        /// default: chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`, not the paper's 0.99).
+        #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN, allow_negative_numbers = true, value_parser = energy_share)]
         p_en: f64,
         /// PMOR-Hertz: the paper's Eq. 20 (made consistent) instead of Weber's approach.
         #[arg(long)]
@@ -210,13 +257,17 @@ enum StaticMethod {
 /// Overrides of the spec's [mesh] section.
 #[derive(clap::Args, Clone, Copy)]
 struct Resolution {
-    #[arg(long)]
+    /// Elements across the tooth (the spec's mesh.elements_across_tooth).
+    #[arg(long, value_parser = count::<1, 64>)]
     across: Option<usize>,
-    #[arg(long)]
+    /// Elements along the profile (mesh.elements_along_profile).
+    #[arg(long, value_parser = count::<1, 64>)]
     profile: Option<usize>,
-    #[arg(long)]
+    /// Elements through the rim (mesh.elements_in_rim).
+    #[arg(long, value_parser = count::<1, 64>)]
     rim: Option<usize>,
-    #[arg(long)]
+    /// Axial slices over the face width (mesh.axial_slices).
+    #[arg(long, value_parser = count::<1, 64>)]
     slices: Option<usize>,
     /// Spacing of the rows along the profile (the spec's mesh.profile_grading).
     #[arg(long, value_enum)]
@@ -242,7 +293,11 @@ fn ste_command(
     resolution: Resolution,
     out: StePlots,
 ) -> Result<()> {
-    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
+    let depth_mm = match method {
+        Method::PmorHertz { depth_m, .. } => Some(depth_m * 1e3),
+        Method::Penalty { .. } => None,
+    };
+    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, None, depth_mm)?;
     let started = std::time::Instant::now();
     let bar = ProgressBar::new_spinner();
     bar.set_message("reducing both gears");
@@ -386,6 +441,17 @@ fn plot_ste(csv: &Path, png: &Path, title: &str) -> Result<()> {
     Ok(())
 }
 
+/// `Err` unless the folder a file is to be written in exists: a typo in `-o` must not make
+/// folders anywhere (and is caught before a minute of offline work, not after).
+fn check_output_folder(file: &Path) -> Result<()> {
+    match file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => {
+            anyhow::bail!("the folder {} of {} does not exist: create it first", dir.display(), file.display())
+        }
+        _ => Ok(()),
+    }
+}
+
 fn load_pair(spec: &Path) -> Result<GearPair> {
     let spec = PairSpec::load(spec)?;
     Ok(GearPair::from_spec(&spec)?)
@@ -407,8 +473,9 @@ fn build(
 ) -> Result<()> {
     // The PMOR-Hertz FMU's accuracy rests on the FE mesh: without a [mesh] section in the spec it
     // takes the mesh measured to meet the DTE's accuracy, not the coarse one of quick studies.
+    check_output_folder(output)?;
     let fallback = matches!(model, ModelChoice::PmorHertz).then(MeshSpec::dynamic_default);
-    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback)?;
+    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback, rom.depth_mm)?;
     let library = match library {
         Some(l) => l,
         None => default_library()?,
@@ -438,7 +505,7 @@ fn build(
             [
                 ("inertia_1", m.gears[0].polar_inertia_kgm2),
                 ("inertia_2", m.gears[1].polar_inertia_kgm2),
-                ("mesh_damping_ratio", 0.0),
+                ("mesh_damping_ratio", m.pair.mesh_damping_ratio),
                 ("max_step", m.max_step_s),
             ],
             format!(
@@ -458,14 +525,13 @@ fn build(
             guid: &guid,
             description: &description,
             model_starts: &starts,
+            operating_torque_nm: pair.operating_torque_nm,
+            yield_torque_nm: gearfmu::gear::rating::yield_torque_nm(&pair),
         },
     )
     .map_err(anyhow::Error::msg)?;
     let file = ModelFile { guid: guid.clone(), pair_name: pair.name.clone(), model: kind };
 
-    if let Some(dir) = output.parent() {
-        std::fs::create_dir_all(dir)?;
-    }
     let out = std::fs::File::create(output).with_context(|| format!("cannot create {}", output.display()))?;
     let mut zip = zip::ZipWriter::new(out);
     let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
@@ -485,12 +551,31 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
     use gearfmu::dynamics::pmor::integrator::Integrator;
     use gearfmu::dynamics::pmor::model::Interpolation;
     use gearfmu::rom::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions};
+    let rom_torques_nm = rom.rom_torques_nm.clone().unwrap_or_else(|| vec![pair.operating_torque_nm]);
+    let yield_torque = gearfmu::gear::rating::yield_torque_nm(pair);
+    if let Some(t) = rom_torques_nm.iter().find(|t| **t > yield_torque) {
+        anyhow::bail!(
+            "--rom-torques-nm {}: beyond the pair's yield torque {} N·m (one pair at the tip bends its root past \
+             material.yield_strength_mpa); give a torque below it",
+            sig(*t),
+            sig(yield_torque)
+        );
+    }
+    let depth_m = rom.depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(pair), |d| d * 1e-3);
+    println!(
+        "PMOR-Hertz build of {}: static shapes at T₁ = {} N·m ({}), contact depth h = {} mm, step to be checked at up to {} N·m (4 × the ROM torque, at most the yield torque)",
+        pair.name,
+        rom_torques_nm.iter().map(|t| sig(*t)).collect::<Vec<_>>().join(", "),
+        if rom.rom_torques_nm.is_some() { "--rom-torques-nm" } else { "the spec's operating torque" },
+        sig(depth_m * 1e3),
+        sig((gearfmu::dynamics::pmor::linear::STEP_LOAD_FACTOR * rom_torques_nm.iter().cloned().fold(0.0, f64::max)).min(yield_torque))
+    );
     let options = DynamicBuildOptions {
         modes: rom.modes,
         angles: rom.angles,
-        rom_torques_nm: rom.rom_torques_nm.clone(),
+        rom_torques_nm,
         sharing_shapes: rom.sharing_shapes,
-        depth_m: rom.depth_mm * 1e-3,
+        depth_m,
         p_en: rom.p_en,
         interpolation: match rom.interpolation {
             InterpolationChoice::CatmullRom => Interpolation::CatmullRom,
@@ -506,8 +591,13 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
     let bar = spinner("PMOR-Hertz build".into());
     // Each stage's start, for the report of where the offline time goes.
     let stages = std::sync::Mutex::new(Vec::<(String, std::time::Instant)>::new());
+    // A spinner on a terminal; plain lines otherwise (a log file, CI), so progress is never silent.
+    let plain = !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let (model, report) = build_dynamic_model(pair, mesh, &options, |m| {
         stages.lock().unwrap().push((m.clone(), std::time::Instant::now()));
+        if plain {
+            eprintln!("[{:6.1} s] {m}", started.elapsed().as_secs_f64());
+        }
         bar.set_message(m)
     })
     .map_err(anyhow::Error::msg)?;
@@ -568,6 +658,12 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
     println!("  base pitch        {:.4} mm", pair.base_pitch_m * 1e3);
     println!("  contact ratios    ε_α {:.4}, ε_β {:.4}", pair.transverse_contact_ratio, pair.overlap_ratio);
     println!("  inertias          {:.5} / {:.5} kg·m²", params.inertia_1_kgm2, params.inertia_2_kgm2);
+    println!(
+        "  torque on gear 1  operating {} N·m; rated {} N·m (nominal root stress at a third of the yield strength), yield {} N·m",
+        sig(pair.operating_torque_nm),
+        sig(gearfmu::gear::rating::rated_torque_nm(&pair)),
+        sig(gearfmu::gear::rating::yield_torque_nm(&pair))
+    );
     println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
     for specific_load in [50.0, 100.0, 200.0, 400.0] {
         let force = specific_load * 1e3 * pair.face_width_m;
@@ -613,20 +709,27 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
 
 /// The pair and its mesh resolution (the spec's [mesh], overridden from the command line).
 fn pair_and_mesh(spec_path: &Path, r: Resolution) -> Result<(GearPair, MeshSpec)> {
-    pair_and_mesh_or(spec_path, r, None)
+    pair_and_mesh_or(spec_path, r, None, None)
 }
 
 /// The pair and its mesh: the spec's `[mesh]` section, or `fallback` where the spec has none (the
-/// spec's defaults without a fallback), then the command line's overrides.
-fn pair_and_mesh_or(spec_path: &Path, r: Resolution, fallback: Option<MeshSpec>) -> Result<(GearPair, MeshSpec)> {
+/// spec's defaults without a fallback), then the command line's overrides. Where neither the
+/// spec nor the command line sets the axial slices, a helical pair gets as many as its contact
+/// depth h (`depth_mm`, default half the module) needs (`MeshSpec::axial_slices_for`).
+fn pair_and_mesh_or(
+    spec_path: &Path,
+    r: Resolution,
+    fallback: Option<MeshSpec>,
+    depth_mm: Option<f64>,
+) -> Result<(GearPair, MeshSpec)> {
     let mut spec = PairSpec::load(spec_path)?;
-    if let Some(mesh) = fallback {
-        let text = std::fs::read_to_string(spec_path)?;
-        let table: toml::Table = toml::from_str(&text).context("the spec is not a TOML table")?;
-        if !table.contains_key("mesh") {
-            spec.mesh = mesh;
-        }
+    let text = std::fs::read_to_string(spec_path)?;
+    let table: toml::Table = toml::from_str(&text).context("the spec is not a TOML table")?;
+    let spec_mesh = table.get("mesh").and_then(|m| m.as_table());
+    if let (Some(mesh), None) = (fallback, spec_mesh) {
+        spec.mesh = mesh;
     }
+    let slices_set = r.slices.is_some() || spec_mesh.is_some_and(|m| m.contains_key("axial_slices"));
     let m = &mut spec.mesh;
     m.elements_across_tooth = r.across.unwrap_or(m.elements_across_tooth);
     m.elements_along_profile = r.profile.unwrap_or(m.elements_along_profile);
@@ -638,8 +741,13 @@ fn pair_and_mesh_or(spec_path: &Path, r: Resolution, fallback: Option<MeshSpec>)
             Grading::Uniform => ProfileGrading::Uniform,
         };
     }
-    let mesh = spec.mesh;
-    Ok((GearPair::from_spec(&spec)?, mesh))
+    let pair = GearPair::from_spec(&spec)?;
+    let mut mesh = spec.mesh;
+    if !slices_set {
+        let depth_m = depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
+        mesh.axial_slices = mesh.axial_slices.max(MeshSpec::axial_slices_for(&pair, depth_m));
+    }
+    Ok((pair, mesh))
 }
 
 fn spinner(message: String) -> ProgressBar {
@@ -700,7 +808,7 @@ fn mesh_command(spec: &Path, resolution: Resolution, vtk: Option<PathBuf>, png: 
 
 fn linearize_command(
     fmu: &Path,
-    torque_nm: f64,
+    torque_nm: Option<f64>,
     mesh_damping_ratio: Option<f64>,
     positions: usize,
     count: usize,
@@ -725,7 +833,8 @@ fn linearize_command(
     let fmu_model = gearfmu::FmuModel::from_model_file(file).map_err(anyhow::Error::msg)?;
     let gearfmu::dynamics::fmu::Physics::PmorHertz { model, place } = &fmu_model.physics else { unreachable!() };
     let mut state = gearfmu::fmi2::Model::initial_state(&fmu_model);
-    let zeta = mesh_damping_ratio.unwrap_or(0.0);
+    let torque_nm = torque_nm.unwrap_or(model.pair.operating_torque_nm);
+    let zeta = mesh_damping_ratio.unwrap_or(state.params.mesh_damping_ratio);
     state.params.mesh_damping_ratio = zeta;
     let dynamics = fmu_model.pmor(model, place, &state);
     let guess = torque_nm / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
@@ -871,17 +980,20 @@ fn main() {
         Command::Linearize { fmu, torque_nm, mesh_damping_ratio, positions, count } => {
             linearize_command(&fmu, torque_nm, mesh_damping_ratio, positions, count)
         }
-        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => {
+        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => (|| {
+            let pair = load_pair(&spec)?;
+            let torque_nm = torque_nm.unwrap_or_else(|| vec![pair.operating_torque_nm]);
+            let depth_m = depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
             let method = match method {
                 StaticMethod::PmorHertz => Method::PmorHertz {
-                    depth_m: depth_mm * 1e-3,
+                    depth_m,
                     p_en,
                     law: if eq20 { ApproachLaw::PaperEq20 } else { ApproachLaw::Weber },
                 },
                 StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
             };
             ste_command(&spec, &torque_nm, angles, pitches, method, resolution, StePlots { csv, png })
-        }
+        })(),
     };
     if let Err(e) = result {
         eprintln!("fmu-build: error: {e:#}");

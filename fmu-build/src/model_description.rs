@@ -12,6 +12,10 @@ pub struct ModelFacts<'a> {
     pub description: &'a str,
     /// Start values for variables whose start is "model".
     pub model_starts: &'a [(&'a str, f64)],
+    /// The torque on gear 1 the model was built for and the one where a tooth root yields
+    /// (N·m): written as the tool's vendor annotation, so a master or a sweep can default to it.
+    pub operating_torque_nm: f64,
+    pub yield_torque_nm: f64,
 }
 
 pub const MODEL_IDENTIFIER: &str = "gearfmu";
@@ -67,6 +71,13 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
     }
     writeln!(w, "  </LogCategories>").unwrap();
     writeln!(w, r#"  <DefaultExperiment startTime="0" stopTime="0.025" stepSize="1e-05"/>"#).unwrap();
+    // FMI 2.0's place for a tool's own data (§2.2.6): read by gearfmu.sweep for its defaults.
+    writeln!(
+        w,
+        r#"  <VendorAnnotations><Tool name="gearfmu"><OperatingPoint torque_1="{:?}" yield_torque_1="{:?}" unit="N.m"/></Tool></VendorAnnotations>"#,
+        facts.operating_torque_nm, facts.yield_torque_nm
+    )
+    .unwrap();
     writeln!(w, "  <ModelVariables>").unwrap();
     let mut outputs = Vec::new();
     for (index, v) in variables.iter().enumerate() {
@@ -130,7 +141,14 @@ mod tests {
 
     fn xml() -> String {
         let starts = [("inertia_1", 1.0), ("inertia_2", 2.0), ("mesh_damping_ratio", 0.05), ("max_step", 1e-5)];
-        let facts = ModelFacts { model_name: "Test", guid: "{x}", description: "d", model_starts: &starts };
+        let facts = ModelFacts {
+            model_name: "Test",
+            guid: "{x}",
+            description: "d",
+            model_starts: &starts,
+            operating_torque_nm: 250.0,
+            yield_torque_nm: 1000.0,
+        };
         write(gearfmu::interface::variables(), &facts).unwrap()
     }
 
@@ -159,7 +177,14 @@ mod tests {
 
     #[test]
     fn a_model_start_without_a_value_is_an_error() {
-        let facts = ModelFacts { model_name: "T", guid: "{x}", description: "d", model_starts: &[] };
+        let facts = ModelFacts {
+            model_name: "T",
+            guid: "{x}",
+            description: "d",
+            model_starts: &[],
+            operating_torque_nm: 250.0,
+            yield_torque_nm: 1000.0,
+        };
         let e = write(gearfmu::interface::variables(), &facts).unwrap_err();
         // The first variable whose start the model must give (in variables.toml order).
         assert!(e.contains("max_step") && e.contains("start = \"model\""), "{e}");

@@ -90,8 +90,23 @@ def build_fmu(spec: Path, model: str = "lumped", out_dir: Path | None = None) ->
     """A spec (.toml) → an .fmu, with the repository's fmu-build (on PATH or in target/release)."""
     tool = _fmu_build()
     out = Path(out_dir or tempfile.mkdtemp(prefix="gearfmu-build-")) / f"{Path(spec).stem}-{model}.fmu"
+    out.parent.mkdir(parents=True, exist_ok=True)
     subprocess.run([tool, "build", str(spec), "-o", str(out), "--model", model], check=True)
     return out
+
+
+def operating_torque_nm(fmu: Path) -> float:
+    """The torque on gear 1 (N·m) the FMU was built for: the spec's [operating] torque_nm or the
+    pair's rated torque, from the tool's vendor annotation in modelDescription.xml (FMI 2.0 §2.2.6)."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    with zipfile.ZipFile(fmu) as archive:
+        root = ET.fromstring(archive.read("modelDescription.xml"))
+    point = root.find("./VendorAnnotations/Tool[@name='gearfmu']/OperatingPoint")
+    if point is None:
+        raise ValueError(f"{fmu} has no gearfmu operating point (built by an older fmu-build): give --torques-nm")
+    return float(point.attrib["torque_1"])
 
 
 def _fmu_build() -> str:
@@ -231,7 +246,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m gearfmu.sweep", description=__doc__.split("\n")[0])
     parser.add_argument("fmu", type=Path, help="the .fmu, or a spec .toml (built with --model)")
     parser.add_argument("--speeds-rpm", required=True, help="gear-1 speeds: a,b,c or start:stop:step")
-    parser.add_argument("--torques-nm", required=True, help="gear-1 driving torques: a,b,c or start:stop:step")
+    parser.add_argument("--torques-nm", help="gear-1 driving torques: a,b,c or start:stop:step "
+                        "(default: the operating torque the FMU was built for)")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUES",
                         help="sweep an FMU parameter too, e.g. mesh_damping_ratio=0.05,0.15 (repeatable)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -255,7 +271,16 @@ def main(argv=None) -> int:
     for item in args.param + args.set:
         name, values = item.split("=", 1)
         parameters[name] = parse_values(values)
-    grid = Grid(tuple(parse_values(args.speeds_rpm)), tuple(parse_values(args.torques_nm)), parameters)
+    if args.torques_nm is None:
+        fmu = args.fmu
+        if fmu.suffix == ".toml":
+            fmu = build_fmu(fmu, args.model)
+            args.fmu = fmu
+        torques = (operating_torque_nm(fmu),)
+        print(f"torque: the FMU's operating torque, {torques[0]:.6g} N·m (--torques-nm to choose)")
+    else:
+        torques = tuple(parse_values(args.torques_nm))
+    grid = Grid(tuple(parse_values(args.speeds_rpm)), torques, parameters)
     recording = Recording(samples_per_mesh_period=args.samples_per_mesh_period,
                           cycles_per_window=args.cycles_per_window, settle_s=args.settle_s,
                           max_record_s=args.max_record_s)

@@ -12,6 +12,7 @@ use crate::fmi2::{Model, Phase};
 use crate::interface;
 use crate::model_file::{ModelFile, ModelKind, FILE_NAME};
 use serde::{Deserialize, Serialize};
+use crate::gear::sig;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -112,6 +113,58 @@ pub struct GearPairState {
     pub mech: LumpedState,
     /// The PMOR-Hertz state (after initialization).
     pub pmor: Option<PmorState>,
+    /// The validity rules already reported ([`Validity`]): each is logged once per instance.
+    #[serde(default)]
+    pub warned: [bool; 2],
+    /// Warnings of the last step, for the FMI layer to log (`Model::take_warnings`).
+    #[serde(default)]
+    pub pending_warnings: Vec<String>,
+}
+
+/// What a run may not silently leave (issue 25): the same rules for both models, checked on the
+/// mesh force at the end of every doStep and logged once each as fmi2Warning.
+#[derive(Debug, Clone, Copy)]
+pub struct Validity {
+    /// [0] The mesh force at which one pair, loaded at its tip, bends its root past the yield
+    /// strength (`gear::rating::yield_mesh_force_n`): the linear-elastic teeth end there.
+    pub yield_mesh_force_n: f64,
+    /// [1] The mesh force of the largest load the model was built and its step checked for
+    /// (PMOR-Hertz: `linear::linearization_torque_nm` / r_b1; the lumped law has no such bound:
+    /// infinite).
+    pub range_mesh_force_n: f64,
+    /// That load as a torque on gear 1 (N·m), for the message.
+    pub range_torque_nm: f64,
+}
+
+impl Validity {
+    /// The warnings the mesh force `force_n` raises that `warned` has not yet given; marks them.
+    pub fn check(&self, force_n: f64, warned: &mut [bool; 2]) -> Vec<String> {
+        let mut out = Vec::new();
+        let f = force_n.abs();
+        if f > self.yield_mesh_force_n && !warned[0] {
+            warned[0] = true;
+            out.push(format!(
+                "mesh force {} N is beyond {} N, where one tooth pair loaded at its tip bends its root past the \
+                 material's yield strength (nominal root stress, Lewis): the linear-elastic gear model does not \
+                 hold there; results past this point are outside the model's validity",
+                sig(f),
+                sig(self.yield_mesh_force_n)
+            ));
+        }
+        if f > self.range_mesh_force_n && !warned[1] {
+            warned[1] = true;
+            out.push(format!(
+                "mesh force {} N is beyond {} N (T₁ = {} N·m), the largest load this model was built and its \
+                 step checked for: rebuild with [operating] torque_nm (or fmu-build build --rom-torques-nm) \
+                 at about {} N·m",
+                sig(f),
+                sig(self.range_mesh_force_n),
+                sig(self.range_torque_nm),
+                sig(f * self.range_torque_nm / self.range_mesh_force_n / crate::dynamics::pmor::linear::STEP_LOAD_FACTOR)
+            ));
+        }
+        out
+    }
 }
 
 /// The physics an FMU carries.
@@ -144,6 +197,7 @@ pub struct LoadedPair {
     /// PMOR-Hertz: the integrator's stability limit (s) for parameters other than the build's (inertias,
     /// mesh damping ratio, as bits), linearized once per set (`check_stability`).
     stability_limits: std::sync::Mutex<Vec<([u64; 3], f64)>>,
+    pub validity: Validity,
 }
 
 /// Stability limits kept per PMOR-Hertz model for parameter sets other than the build's.
@@ -182,7 +236,30 @@ impl LoadedPair {
             Physics::Lumped(mesh) => crate::dynamics::lumped::stiffest_tangent_stiffness(mesh),
             Physics::PmorHertz { .. } => 0.0,
         };
-        Ok(LoadedPair { guid: file.guid, physics, stiffest_mesh_n_per_m, lookup, stability_limits: Default::default() })
+        let validity = match &physics {
+            Physics::Lumped(mesh) => Validity {
+                yield_mesh_force_n: mesh.yield_mesh_force_n,
+                range_mesh_force_n: f64::INFINITY,
+                range_torque_nm: f64::INFINITY,
+            },
+            Physics::PmorHertz { model, .. } => {
+                let range_torque_nm = crate::dynamics::pmor::linear::linearization_torque_nm(model);
+                // Forged model data may make these NaN: a NaN bound never warns, and nothing panics.
+                Validity {
+                    yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(&model.pair),
+                    range_mesh_force_n: range_torque_nm / model.gears[0].base_radius_m,
+                    range_torque_nm,
+                }
+            }
+        };
+        Ok(LoadedPair {
+            guid: file.guid,
+            physics,
+            stiffest_mesh_n_per_m,
+            lookup,
+            stability_limits: Default::default(),
+            validity,
+        })
     }
 }
 
@@ -275,7 +352,7 @@ impl GearPairFmu {
     fn pmor_stability_limit(&self, model: &PmorModel, place: &PairPlacement, s: &GearPairState) -> Result<f64, String> {
         let p = &s.params;
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
-        if p.mesh_damping_ratio == 0.0 && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
+        if p.mesh_damping_ratio == model.pair.mesh_damping_ratio && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
             return Ok(model.stability_limit_s);
         }
         let key = [p.inertia_1_kgm2.to_bits(), p.inertia_2_kgm2.to_bits(), p.mesh_damping_ratio.to_bits()];
@@ -429,12 +506,22 @@ impl Model for GearPairFmu {
                 LumpedParameters {
                     inertia_1_kgm2: model.gears[0].polar_inertia_kgm2,
                     inertia_2_kgm2: model.gears[1].polar_inertia_kgm2,
-                    // The paper's model: modal damping only, no mesh damper.
-                    mesh_damping_ratio: 0.0,
+                    // The spec's mounting.mesh_damping_ratio, as the lumped FMU's (the build's
+                    // step limit was found with it).
+                    mesh_damping_ratio: model.pair.mesh_damping_ratio,
                 },
             ),
         };
-        GearPairState { torques_nm: [0.0; 2], start, max_step_s, params, mech: start, pmor: None }
+        GearPairState {
+            torques_nm: [0.0; 2],
+            start,
+            max_step_s,
+            params,
+            mech: start,
+            pmor: None,
+            warned: [false; 2],
+            pending_warnings: Vec::new(),
+        }
     }
 
     fn set_real(&self, s: &mut GearPairState, vr: u32, value: f64, phase: Phase) -> Result<(), String> {
@@ -601,11 +688,14 @@ impl Model for GearPairFmu {
                 let dynamics = self.pmor(model, place, s);
                 dynamics.advance(&mut state, s.torques_nm, h, s.max_step_s)?;
                 let start = model.initial_state([s.start.theta_1, s.start.theta_2], [s.start.omega_1, s.start.omega_2]);
+                let end = dynamics.outputs(&state)?;
                 energy_balance(
-                    [dynamics.outputs(&start)?.total_energy_j(), dynamics.outputs(&state)?.total_energy_j()],
+                    [dynamics.outputs(&start)?.total_energy_j(), end.total_energy_j()],
                     [state.input_work_j - start.input_work_j, state.dissipated_j - start.dissipated_j],
                 )?;
                 s.pmor = Some(state);
+                let warnings = self.validity.check(end.contact.normal_force_n, &mut s.warned);
+                s.pending_warnings.extend(warnings);
                 return Ok(());
             }
         };
@@ -625,7 +715,13 @@ impl Model for GearPairFmu {
             [next.input_work_j - s.start.input_work_j, next.dissipated_j - s.start.dissipated_j],
         )?;
         s.mech = next;
+        let warnings = self.validity.check(model.mesh_state(&next).force_n, &mut s.warned);
+        s.pending_warnings.extend(warnings);
         Ok(())
+    }
+
+    fn take_warnings(&self, s: &mut GearPairState) -> Vec<String> {
+        std::mem::take(&mut s.pending_warnings)
     }
 }
 

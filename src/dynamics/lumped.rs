@@ -44,6 +44,10 @@ pub struct LumpedMesh {
     /// offline: damping and the predicted natural frequency use it, the step path must not
     /// recompute it (an O(N) mean).
     pub reference_stiffness_n_per_m: f64,
+    /// The mesh force (N, along the line of action) at which one pair carrying it at the tip
+    /// bends its root past the yield strength (`gear::rating::yield_mesh_force_n`): beyond it the
+    /// FMU logs a warning, once (the same rule as the PMOR-Hertz FMU's).
+    pub yield_mesh_force_n: f64,
 }
 
 /// Roll-position samples per base pitch, axial slices for helical gears, force levels.
@@ -86,6 +90,7 @@ impl LumpedMesh {
             coast_pairs,
             reference_force_n: reference_force,
             reference_stiffness_n_per_m: reference_stiffness,
+            yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(pair),
         })
     }
 

@@ -55,7 +55,19 @@ impl MeshSpec {
     pub fn dynamic_default() -> Self {
         MeshSpec { elements_across_tooth: 10, elements_along_profile: 10, elements_in_rim: 10, ..Self::default() }
     }
+
+    /// The fewest axial slices a helical pair of contact depth `depth_m` needs: a slice of length
+    /// Δz shifts the helical flank by Δz·tan β_b along the transverse contact normal, and the
+    /// partial models of depth h must reach past that, Δz·tan β_b < h; with the margin
+    /// `SLICE_DEPTH_MARGIN` (1.8, the Kurokawa helical spec's 8 slices). 1 for a spur pair.
+    pub fn axial_slices_for(pair: &crate::gear::GearPair, depth_m: f64) -> usize {
+        let shift = pair.face_width_m * pair.base_helix_angle_rad.tan();
+        (SLICE_DEPTH_MARGIN * shift / depth_m).ceil().max(1.0) as usize
+    }
 }
+
+/// Δz·tan β_b is kept below h / `SLICE_DEPTH_MARGIN` by `MeshSpec::axial_slices_for`.
+pub const SLICE_DEPTH_MARGIN: f64 = 1.8;
 
 impl Default for MeshSpec {
     /// The coarse default (tests, quick studies, the statics and the lumped model's inspection).

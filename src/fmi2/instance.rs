@@ -59,6 +59,7 @@ pub struct Instance<M: Model> {
 pub type Status = fmi2Status;
 pub const OK: Status = fmi2Status_fmi2OK;
 pub const ERROR: Status = fmi2Status_fmi2Error;
+pub const WARNING: Status = fmi2Status_fmi2Warning;
 pub const DISCARD: Status = fmi2Status_fmi2Discard;
 
 impl<M: Model> Instance<M> {
@@ -79,10 +80,14 @@ impl<M: Model> Instance<M> {
     }
 
     /// Passes one message to the master's logger, always with "%s" as the format so that a
-    /// message containing '%' is never interpreted. Errors and discards (a refusal the master
-    /// must be able to explain) are logged even with logging off.
+    /// message containing '%' is never interpreted. Errors, discards and warnings (a refusal, or a
+    /// result outside the model's validity: what the master must be able to explain) are logged
+    /// even with logging off.
     pub fn log(&self, status: Status, category: usize, message: &str) {
-        let wanted = status == ERROR || status == DISCARD || (self.logging_on && self.enabled_categories[category]);
+        let wanted = status == ERROR
+            || status == DISCARD
+            || status == WARNING
+            || (self.logging_on && self.enabled_categories[category]);
         if let (true, Some(logger)) = (wanted, self.callbacks.logger) {
             let text = CString::new(message.replace('\0', " ")).unwrap_or_default();
             let category = CString::new(LOG_CATEGORIES[category]).unwrap_or_default();
@@ -199,6 +204,11 @@ impl<M: Model> Instance<M> {
             Ok(()) => {
                 // Take the master's time grid, so that t never drifts from its sum.
                 self.time = current + h;
+                // A result outside the model's validity is never a silent number: logged whatever
+                // the debug-logging setting, once per rule, and the step stands.
+                for warning in self.model.take_warnings(&mut self.state) {
+                    self.log(WARNING, 1, &format!("{F} at t = {}: {warning}", self.time));
+                }
                 OK
             }
             Err(e) => {

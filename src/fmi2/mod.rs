@@ -49,4 +49,9 @@ pub trait Model: Sized + Send + 'static {
     fn check_state(&self, state: &Self::State, initialized: bool) -> Result<(), String>;
     /// Advances from the current time by h (> 0) with the inputs held.
     fn do_step(&self, state: &mut Self::State, h: f64) -> Result<(), String>;
+    /// Warnings the last step raised (a result outside the model's validity), each to be logged
+    /// once as fmi2Warning; taken, so the state no longer holds them.
+    fn take_warnings(&self, _state: &mut Self::State) -> Vec<String> {
+        Vec::new()
+    }
 }

@@ -6,6 +6,7 @@
 
 pub mod fillet;
 pub mod involute;
+pub mod rating;
 pub mod root_stress;
 pub mod spec;
 
@@ -14,6 +15,14 @@ use serde::{Deserialize, Serialize};
 use spec::invalid;
 pub use spec::{HertzContact, PairSpec, SpecError};
 use std::f64::consts::PI;
+
+/// The normal modules a spec may give (mm): below, the tooth is finer than a 3 mm-class FE mesh
+/// and the Hertz band resolve together; above, no gear is made.
+pub const MODULE_RANGE_MM: (f64, f64) = (0.1, 100.0);
+/// The most teeth a gear may have: every tooth is meshed, so the FE model grows with z.
+pub const MAX_TEETH: i64 = 500;
+/// Yield strengths a spec may give (MPa): from gear plastics to through-hardened steel.
+pub const YIELD_RANGE_MPA: (f64, f64) = (20.0, 5000.0);
 
 /// The default tip edge radius over the normal module (`GearSpec::tip_edge_radius_mm`).
 pub const DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE: f64 = 0.1;
@@ -115,6 +124,9 @@ pub struct GearPair {
     /// Yield strength: the bound of the tooth-root stress guard (`root_stress`).
     pub yield_strength_pa: f64,
     pub mesh_damping_ratio: f64,
+    /// The design torque on gear 1 (N·m): the spec's `operating.torque_nm`, or the pair's rated
+    /// torque (`rating::rated_torque_nm`). What the offline builds size their models on.
+    pub operating_torque_nm: f64,
     /// Dedendum of the basic rack over the module, h_fP/m_n (ISO 6336-1's C_B needs it).
     pub rack_dedendum_coefficient: f64,
     /// Contact law of the lumped model.
@@ -160,7 +172,7 @@ fn positive(field: &str, value: f64) -> Result<f64, SpecError> {
     if value.is_normal() && value > 0.0 {
         Ok(value)
     } else {
-        Err(invalid(field, format!("must be a positive finite number, got {value}")))
+        Err(invalid(field, format!("must be a positive finite number, got {}", sig(value))))
     }
 }
 
@@ -172,7 +184,7 @@ fn positive_si(field: &str, value: f64, scale: f64) -> Result<f64, SpecError> {
     if si.is_normal() {
         Ok(si)
     } else {
-        Err(invalid(field, format!("{value} is out of range: it is {si} in SI units")))
+        Err(invalid(field, format!("{} is out of range: it is {} in SI units", sig(value), sig(si))))
     }
 }
 
@@ -190,6 +202,17 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     }
     let rack = &spec.rack;
     let mn = positive_si("rack.module_mm", rack.module_mm, 1e-3)?;
+    if !(MODULE_RANGE_MM.0..=MODULE_RANGE_MM.1).contains(&rack.module_mm) {
+        return Err(invalid(
+            "rack.module_mm",
+            format!(
+                "must be in [{}, {}] mm (the range of gear modules the FE mesh and the Hertz law are sized for), got {}",
+                MODULE_RANGE_MM.0,
+                MODULE_RANGE_MM.1,
+                sig(rack.module_mm)
+            ),
+        ));
+    }
     let alpha_n_deg = positive("rack.pressure_angle_deg", rack.pressure_angle_deg)?;
     if alpha_n_deg >= 45.0 {
         return Err(invalid("rack.pressure_angle_deg", "must be below 45°"));
@@ -240,6 +263,15 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let gear = |which: &str, g: &spec::GearSpec, helix_hand: spec::HelixHand| -> Result<Gear, SpecError> {
         if g.teeth <= 0 {
             return Err(invalid(&format!("{which}.teeth"), "must be a positive integer"));
+        }
+        if g.teeth > MAX_TEETH {
+            return Err(invalid(
+                &format!("{which}.teeth"),
+                format!(
+                    "must be at most {MAX_TEETH}, got {} (every tooth is meshed: the FE model grows with z)",
+                    g.teeth
+                ),
+            ));
         }
         let z = g.teeth as f64;
         let x = g.profile_shift;
@@ -375,16 +407,37 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     // inside its base circle.
     let u_form1 = (g1.form_radius_m.powi(2) - g1.base_radius_m.powi(2)).max(0.0).sqrt();
     let u_form2 = (g2.form_radius_m.powi(2) - g2.base_radius_m.powi(2)).max(0.0).sqrt();
+    // The field named is one the user set: a profile shift where one is given (it moves both the
+    // tip and the form circle), else the teeth of the gear whose tip interferes.
+    let culprit = |tip_gear: &str, other: &str| -> String {
+        let shift = |which: &str| if which == "gear1" { spec.gear1.profile_shift } else { spec.gear2.profile_shift };
+        if shift(other) != 0.0 {
+            format!("{other}.profile_shift")
+        } else if shift(tip_gear) != 0.0 {
+            format!("{tip_gear}.profile_shift")
+        } else {
+            format!("{tip_gear}.teeth")
+        }
+    };
+    let shifts = format!("x₁ = {}, x₂ = {}", sig(g1.profile_shift), sig(g2.profile_shift));
     if path_start < u_form1 - 1e-12 {
         return Err(invalid(
-            "gear2.teeth",
-            "tip interference: gear 2's tip reaches below gear 1's form circle (into the fillet)",
+            &culprit("gear2", "gear1"),
+            format!(
+                "tip interference: gear 2's tip reaches below gear 1's form circle (into the fillet) \
+                 at z {}/{}, {shifts}",
+                g1.teeth, g2.teeth
+            ),
         ));
     }
     if loa - path_end < u_form2 - 1e-12 {
         return Err(invalid(
-            "gear1.teeth",
-            "tip interference: gear 1's tip reaches below gear 2's form circle (into the fillet)",
+            &culprit("gear1", "gear2"),
+            format!(
+                "tip interference: gear 1's tip reaches below gear 2's form circle (into the fillet) \
+                 at z {}/{}, {shifts}",
+                g1.teeth, g2.teeth
+            ),
         ));
     }
     let pbt = PI * mt * alpha_t.cos();
@@ -411,12 +464,23 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         ));
     }
     if eps_alpha < 1.0 {
+        // Named against what the user set: the center distance if given, else the teeth's height.
+        let field = if spec.mounting.center_distance_mm.is_some() {
+            "mounting.center_distance_mm"
+        } else {
+            "rack.addendum_coefficient"
+        };
         return Err(invalid(
-            "mounting.center_distance_mm",
-            format!("transverse contact ratio ε_α = {eps_alpha:.3} < 1: the mesh is not continuous"),
+            field,
+            format!(
+                "transverse contact ratio ε_α = {eps_alpha:.3} < 1: the mesh is not continuous \
+                 (addendum coefficient {}, center distance {:.3} mm)",
+                sig(ha),
+                a * 1e3
+            ),
         ));
     }
-    Ok(GearPair {
+    let mut pair = GearPair {
         name: spec.name.clone(),
         gear1: g1,
         gear2: g2,
@@ -437,9 +501,63 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         youngs_modulus_pa: e,
         poisson_ratio: nu,
         density_kg_m3: rho,
-        yield_strength_pa: positive_si("material.yield_strength_mpa", mat.yield_strength_mpa, 1e6)?,
+        yield_strength_pa: {
+            let y = positive_si("material.yield_strength_mpa", mat.yield_strength_mpa, 1e6)?;
+            if !(YIELD_RANGE_MPA.0..=YIELD_RANGE_MPA.1).contains(&mat.yield_strength_mpa) {
+                return Err(invalid(
+                    "material.yield_strength_mpa",
+                    format!(
+                        "must be in [{}, {}] MPa (gear materials, from plastics to through-hardened steel), got {}",
+                        YIELD_RANGE_MPA.0,
+                        YIELD_RANGE_MPA.1,
+                        sig(mat.yield_strength_mpa)
+                    ),
+                ));
+            }
+            y
+        },
         mesh_damping_ratio: zeta,
+        operating_torque_nm: 0.0,
         rack_dedendum_coefficient: hf,
         hertz_contact: spec.lumped.hertz_contact,
-    })
+    };
+    let yield_torque = rating::yield_torque_nm(&pair);
+    pair.operating_torque_nm = match spec.operating.torque_nm {
+        None => rating::rated_torque_nm(&pair),
+        Some(t) => {
+            let t = positive("operating.torque_nm", t)?;
+            if t > yield_torque {
+                return Err(invalid(
+                    "operating.torque_nm",
+                    format!(
+                        "{} N·m bends a tooth root past material.yield_strength_mpa: one pair carrying it at the tip \
+                         yields at {} N·m (nominal root stress, Lewis); the linear-elastic model does not hold there",
+                        sig(t),
+                        sig(yield_torque)
+                    ),
+                ));
+            }
+            t
+        }
+    };
+    Ok(pair)
+}
+
+/// A number with six significant digits, in exponent form when it is very large or small: what
+/// a message prints of a value a user typed (1e200 is not worth 200 digits).
+pub fn sig(value: f64) -> String {
+    let a = value.abs();
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    if !(1e-4..1e7).contains(&a) {
+        return format!("{value:.5e}");
+    }
+    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+    let text = format!("{value:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
 }

@@ -9,7 +9,8 @@ use std::path::Path;
 /// Errors of a spec: each names the field and the rule it broke.
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
-    #[error("cannot read spec file {path}: {source}")]
+    /// The OS error is the source, printed once by the caller's error chain, not twice.
+    #[error("cannot read spec file {path}")]
     Io { path: String, source: std::io::Error },
     #[error("spec is not valid TOML or has an unknown/missing key: {0}")]
     Parse(String),
@@ -140,6 +141,18 @@ pub struct LumpedSpec {
     pub hertz_contact: HertzContact,
 }
 
+/// The operating point the pair is designed for: what the offline build sizes its model on.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OperatingSpec {
+    /// The design torque on gear 1 (N·m). Default: the pair's rated torque
+    /// ([`crate::gear::rating::rated_torque_nm`], from the tooth-root stress and the yield
+    /// strength). The PMOR-Hertz build takes its static contact shapes at this torque, checks its
+    /// step up to `STEP_LOAD_FACTOR` × it, and `fmu-build linearize` and the sweeps default to it.
+    #[serde(default)]
+    pub torque_nm: Option<f64>,
+}
+
 /// The whole pair spec as written in the TOML file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -152,6 +165,8 @@ pub struct PairSpec {
     pub gear2: GearSpec,
     #[serde(default)]
     pub lumped: LumpedSpec,
+    #[serde(default)]
+    pub operating: OperatingSpec,
     /// Finite element mesh resolution (defaults: the coarse test mesh).
     #[serde(default)]
     pub mesh: crate::fe::gear_mesh::MeshSpec,

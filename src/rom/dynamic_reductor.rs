@@ -118,6 +118,11 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
         [0.0; 2],
     );
     dynamics.integrator = options.integrator;
+    // The FMU starts with the spec's mesh damping ratio: its default step must hold with it.
+    dynamics.mesh_damping_n_s_per_m = model.mesh_damper_n_s_per_m(
+        model.pair.mesh_damping_ratio,
+        [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2],
+    );
     linear::default_step(&dynamics)
 }
 
@@ -546,6 +551,7 @@ pub fn build_dynamic_model(
         integrator: options.integrator,
         max_step_s: 0.0,
         stability_limit_s: 0.0,
+        step_checked_torque_nm: 0.0,
         info: PmorBuildInfo {
             rom_torques_nm: options.rom_torques_nm.clone(),
             sharing_shapes: options.sharing_shapes,
@@ -561,6 +567,7 @@ pub fn build_dynamic_model(
     let step = integrator_step(&model, options)?;
     model.max_step_s = step.max_step_s;
     model.stability_limit_s = step.stability_limit_s;
+    model.step_checked_torque_nm = step.torque_nm;
     let report = DynamicBuildReport {
         step,
         modes_hz: report_modes.try_into().map_err(|_| "two gears")?,

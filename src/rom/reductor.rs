@@ -38,6 +38,15 @@ pub struct ReducedGear {
 /// the STE moves by under 1 % between 2 and 4 mm (BENCHMARKS, "Mesh independence").
 pub const DEFAULT_CONTACT_DEPTH_M: f64 = 3e-3;
 
+/// The default depth over the normal module: 3 mm on the Kurokawa pairs' 6 mm, and the same
+/// share of the tooth on any other pair (a fixed 3 mm would reach through a 2 mm tooth).
+pub const CONTACT_DEPTH_OVER_MODULE: f64 = 0.5;
+
+/// The default depth h of a pair (m): `CONTACT_DEPTH_OVER_MODULE` × its normal module.
+pub fn contact_depth_m(pair: &crate::gear::GearPair) -> f64 {
+    CONTACT_DEPTH_OVER_MODULE * pair.normal_module_m
+}
+
 /// What a gear's reduced coordinates are. The static contact problem is condensed onto the
 /// contact forces through the response q = K_r⁻¹·b of the reduced load b of a flank load; both
 /// reductions make that response free, for different reasons.

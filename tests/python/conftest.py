@@ -75,6 +75,7 @@ def gear_fmus(tmp_path_factory) -> dict[str, GearCase]:
     cases = {}
     for name, (spec, fmu_file, kind) in {**GEAR_SPECS, **PMOR_SPECS}.items():
         fmu_path = REPO_ROOT / "target" / "fmu" / fmu_file
+        fmu_path.parent.mkdir(parents=True, exist_ok=True)
         _fmu_build("build", spec, "-o", str(fmu_path.relative_to(REPO_ROOT)), "--model", kind)
         mesh_json_path = out_dir / f"{name}_mesh.json"
         _fmu_build("inspect", spec, "--json", str(mesh_json_path))

@@ -41,12 +41,47 @@ pub struct IntegratorStep {
     pub max_step_s: f64,
 }
 
+/// The load (N·m on gear 1) the step limit is proven at, and the top of the model's load range:
+/// the one the build found (`PmorModel::step_checked_torque_nm`), else the first it tries,
+/// [`step_load_ceiling_nm`].
+pub fn linearization_torque_nm(model: &crate::dynamics::pmor::model::PmorModel) -> f64 {
+    if model.step_checked_torque_nm > 0.0 {
+        model.step_checked_torque_nm
+    } else {
+        step_load_ceiling_nm(model)
+    }
+}
+
+/// `STEP_LOAD_FACTOR` × the largest ROM torque, but no more than the pair's yield torque
+/// (`gear::rating`): beyond it the teeth yield and no linear-elastic model holds.
+pub fn step_load_ceiling_nm(model: &crate::dynamics::pmor::model::PmorModel) -> f64 {
+    let rom = model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    (STEP_LOAD_FACTOR * rom).min(crate::gear::rating::yield_torque_nm(&model.pair).max(rom))
+}
+
+/// Each retry of the build's linearization lowers the load by this factor.
+const STEP_LOAD_BACKOFF: f64 = 0.8;
+
 /// The default step of `dynamics` (its integrator, inertias and damping): the stability limit on
-/// the pair linearized under `STEP_LOAD_FACTOR` × the model's largest ROM torque
-/// (`stability_limit_under_load`), and `STEP_SAFETY` of it.
+/// the pair linearized under [`linearization_torque_nm`] (`stability_limit_under_load`), and
+/// `STEP_SAFETY` of it. In the build (no load found yet) a load at which the contact law leaves
+/// its range (the Hertz band wider than h/4 on a pair whose teeth are short against their
+/// load, e.g. a small helical pair near its yield torque) is lowered by `STEP_LOAD_BACKOFF`
+/// down to the ROM torque, and the load reached is the model's range (`IntegratorStep::torque_nm`).
 pub fn default_step(dynamics: &PmorDynamics) -> Result<IntegratorStep, String> {
-    let torque_nm = STEP_LOAD_FACTOR * dynamics.model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    let (stability_limit_s, natural_frequencies_hz) = stability_limit_under_load(dynamics, torque_nm)?;
+    let model = dynamics.model;
+    let rom = model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    let mut torque_nm = linearization_torque_nm(model);
+    let retry = model.step_checked_torque_nm <= 0.0;
+    let (stability_limit_s, natural_frequencies_hz) = loop {
+        match stability_limit_under_load(dynamics, torque_nm) {
+            Ok(found) => break found,
+            Err(_) if retry && torque_nm > rom * (1.0 + 1e-9) => {
+                torque_nm = (STEP_LOAD_BACKOFF * torque_nm).max(rom);
+            }
+            Err(e) => return Err(format!("linearized at T₁ = {torque_nm:.4} N·m: {e}")),
+        }
+    };
     Ok(IntegratorStep {
         torque_nm,
         natural_frequencies_hz,

@@ -182,7 +182,22 @@ impl<'a> PmorDynamics<'a> {
 
     fn stencil(&self, i: usize, anchor: i64, theta: f64) -> Result<Stencil, String> {
         let g = &self.model.gears[i];
-        g.stencil(self.model.interpolation, theta - anchor as f64 * g.pitch_rad())
+        let theta_ref = theta - anchor as f64 * g.pitch_rad();
+        // Within one integrator step a gear turns by far less than a sample interval; an angle
+        // beyond the stored samples means the state ran away, and the user needs that, not
+        // the sample bookkeeping.
+        g.stencil(self.model.interpolation, theta_ref).map_err(|_| {
+            format!(
+                "the state ran away: gear {} turned {} rad past its pitch within one integrator step \
+                 (θ = {} rad). Either the load is beyond what this model was built for (its step is \
+                 checked up to T₁ = {} N·m; rebuild with [operating] torque_nm or --rom-torques-nm at \
+                 the load you run), or max_step is beyond the integrator's stability limit",
+                i + 1,
+                crate::gear::sig(theta_ref),
+                crate::gear::sig(theta),
+                crate::gear::sig(linear::linearization_torque_nm(self.model))
+            )
+        })
     }
 
     /// The state as a flat vector y (per gear [θ, η], then per gear [θ̇, η̇], then the work).

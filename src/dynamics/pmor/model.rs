@@ -172,5 +172,8 @@ pub struct PmorModel {
     /// The integrator's stability limit on that linearization (s): the FMU refuses a max_step
     /// above it at ExitInitializationMode (issue 13's stability contract).
     pub stability_limit_s: f64,
+    /// The load on gear 1 (N·m) that limit was found at, the top of the model's load range
+    /// (`linear::default_step`); 0 while the build has not yet found it.
+    pub step_checked_torque_nm: f64,
     pub info: PmorBuildInfo,
 }

@@ -1,0 +1,200 @@
+"""A pair that is not the Kurokawa example, built on its defaults and run through fmpy (issue 25).
+
+* The shipped small examples (``examples/small_spur.toml``, ``small_helical.toml``: m_n 2.5 mm,
+  z 23/41, b 18 mm, x +0.2/−0.1; the helical at β 25°) and a pair of a size no example covers
+  (m 1.75 mm, z 19/57, b 12 mm, written here) build with both models on their defaults: no
+  ``--rom-torques-nm``, no ``[mesh]``, no ``[operating]`` — the ROM torque, the contact depth, the
+  helical pair's axial slices and the step's load follow from the spec.
+* Each FMU is driven by fmpy at the pair's operating torque (``fmu-build inspect``) against an
+  explicit viscous brake fed back from ``w_2``. Evidence: the steady state's closed form — the
+  speed ratio is z₂/z₁ and the brake's torque balances T₁·z₂/z₁, so ω₂ = T₁z₂/(z₁c).
+* Run-time validity, the same rule in both models: a mesh force past the yield of a tooth root
+  (one pair loaded at its tip, ``gear::rating``) is logged once as fmi2Warning, never silently.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+TOOL = REPO_ROOT / "target" / "release" / "fmu-build"
+
+UNCOVERED_SIZE = """\
+# A spur pair of a size no example covers: m 1.75 mm, ratio 3.
+name = "RatioThree"
+
+[rack]
+module_mm = 1.75
+pressure_angle_deg = 20.0
+
+[material]
+youngs_modulus_gpa = 206.0
+poisson_ratio = 0.3
+density_kg_m3 = 7850.0
+yield_strength_mpa = 900.0
+
+[mounting]
+face_width_mm = 12.0
+backlash_mm = 0.04
+mesh_damping_ratio = 0.05
+
+[gear1]
+teeth = 19
+profile_shift = 0.3
+bore_radius_mm = 8.0
+
+[gear2]
+teeth = 57
+bore_radius_mm = 20.0
+"""
+
+PAIRS = ("small_spur", "small_helical", "ratio_three")
+MODELS = ("pmor-hertz", "lumped")
+
+
+def _spec(name: str, tmp: Path) -> Path:
+    if name == "ratio_three":
+        path = tmp / "ratio_three.toml"
+        path.write_text(UNCOVERED_SIZE)
+        return path
+    return REPO_ROOT / "examples" / f"{name}.toml"
+
+
+def _run(*args: str) -> str:
+    proc = subprocess.run([str(TOOL), *args], cwd=REPO_ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, f"fmu-build {' '.join(args)} failed:\n{proc.stdout}\n{proc.stderr}"
+    return proc.stdout
+
+
+@pytest.fixture(scope="module")
+def own_fmus(gear_fmus, tmp_path_factory):
+    """(pair, model) -> (fmu path, unzip dir, operating torque N·m, teeth (z1, z2)).
+
+    ``gear_fmus`` first: it builds the workspace (the fmu-build binary and the FMU library)."""
+    from fmpy import extract
+
+    tmp = tmp_path_factory.mktemp("own_pairs")
+    built = {}
+    for pair in PAIRS:
+        spec = _spec(pair, tmp)
+        inspect = _run("inspect", str(spec))
+        torque = float(re.search(r"operating ([0-9.e+]+) N·m", inspect).group(1))
+        teeth = tuple(int(z) for z in re.search(r"z (\d+)/(\d+)", inspect).groups())
+        for model in MODELS:
+            fmu = tmp / f"{pair}-{model}.fmu"
+            # On its defaults: the spec and the model kind, nothing else.
+            _run("build", str(spec), "-o", str(fmu), "--model", model)
+            unzip = Path(extract(str(fmu), unzipdir=tmp / f"{pair}-{model}"))
+            built[(pair, model)] = (fmu, unzip, torque, teeth)
+    return built
+
+
+def _slave(fmu: Path, unzip: Path, name: str, callbacks=None):
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=str(unzip),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    slave.instantiate(callbacks=callbacks)
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    return slave, vr
+
+
+def _brake_run(slave, vr, torque_nm, brake, t_end, h=1e-4, ramp_s=2e-3):
+    """Haversine ramp of T₁ to `torque_nm` over `ramp_s`, viscous brake −brake·w_2 fed back each
+    step (explicit coupling, as a master does). Returns rows (t, w_1, w_2, dte)."""
+    rows, t = [], 0.0
+    for _ in range(int(round(t_end / h))):
+        ramp = 1.0 if t >= ramp_s else 0.5 * (1.0 - math.cos(math.pi * t / ramp_s))
+        w_2 = slave.getReal([vr["w_2"]])[0]
+        slave.setReal([vr["tau_1"], vr["tau_2"]], [torque_nm * ramp, -brake * w_2])
+        slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        t += h
+        rows.append((t, *slave.getReal([vr["w_1"], vr["w_2"], vr["dte"]])))
+    return rows
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("pair", PAIRS)
+def test_own_pair_on_defaults_reaches_the_closed_form_steady_state(own_fmus, pair, model):
+    fmu, unzip, torque, (z1, z2) = own_fmus[(pair, model)]
+    target_w2 = 40.0  # rad/s: the brake is sized for it
+    brake = torque * z2 / z1 / target_w2
+    slave, vr = _slave(fmu, unzip, f"own_{pair}_{model}")
+    try:
+        rows = _brake_run(slave, vr, torque, brake, t_end=12e-3)
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+    tail = [r for r in rows if r[0] > rows[-1][0] - 4e-3]
+    w1 = sum(r[1] for r in tail) / len(tail)
+    w2 = sum(r[2] for r in tail) / len(tail)
+    dte = sum(r[3] for r in tail) / len(tail)
+    print(f"{pair} {model}: T1 {torque:.1f} N·m, w2 {w2:.4f} rad/s (closed form {target_w2}), "
+          f"w1/w2 {w1 / w2:.5f} (z2/z1 {z2 / z1:.5f}), mean DTE {dte * 1e6:.3f} µm")
+    assert w1 / w2 == pytest.approx(z2 / z1, rel=5e-3)
+    # The brake's time constant is well under a millisecond here: 4 ms in, ω₂ sits at the closed form.
+    assert w2 == pytest.approx(target_w2, rel=1e-2)
+    # Driven, the teeth deflect forward: a positive transmission error of a few to tens of µm.
+    assert 0.0 < dte < 100e-6
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_mesh_force_past_the_root_yield_is_logged_once_in_both_models(own_fmus, model, log_capture):
+    from fmpy.fmi2 import fmi2Warning
+
+    fmu, unzip, torque, (z1, z2) = own_fmus[("small_spur", model)]
+    name = f"yield_warning_{model}"
+    # The spec's rated torque is a third of the yield torque (gear::rating): 4.5 × it is 1.5 × past
+    # yield. The lumped law carries it; the PMOR-Hertz model also says it is past its checked range.
+    overload = 4.5 * torque
+    slave, vr = _slave(fmu, unzip, name, callbacks=log_capture.callbacks)
+    try:
+        rows = _brake_run(slave, vr, overload, overload * z2 / z1 / 40.0, t_end=4e-3, h=1e-4, ramp_s=1e-3)
+    except Exception as error:  # a run-away past the model's range must say so, not crash
+        lines = log_capture.for_instance(name)
+        assert any("ran away" in m or "beyond" in m for (_, _, m) in lines), (error, lines)
+        rows = None
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+    lines = log_capture.for_instance(name)
+    warnings = [m for (s, _, m) in lines if s == fmi2Warning and "yield strength" in m]
+    assert len(warnings) == 1, lines
+    assert "mesh force" in warnings[0] and " N " in warnings[0]
+    if model == "pmor-hertz":
+        assert any(s == fmi2Warning and "rebuild with [operating] torque_nm" in m for (s, _, m) in lines), lines
+    if rows is not None:
+        assert all(math.isfinite(r[2]) for r in rows)
+
+
+def test_no_warning_at_the_operating_torque(own_fmus, log_capture):
+    from fmpy.fmi2 import fmi2Warning
+
+    fmu, unzip, torque, (z1, z2) = own_fmus[("small_spur", "lumped")]
+    name = "no_warning_lumped"
+    slave, vr = _slave(fmu, unzip, name, callbacks=log_capture.callbacks)
+    try:
+        _brake_run(slave, vr, torque, torque * z2 / z1 / 40.0, t_end=4e-3)
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+    assert not [m for (s, _, m) in log_capture.for_instance(name) if s == fmi2Warning]
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_the_fmu_carries_its_operating_point_for_the_sweeps(own_fmus, model):
+    """gearfmu.sweep's default torque is the one fmu-build inspect prints for the spec."""
+    from gearfmu.sweep import operating_torque_nm
+
+    fmu, _, torque, _ = own_fmus[("small_spur", model)]
+    assert operating_torque_nm(fmu) == pytest.approx(torque, rel=1e-5)
