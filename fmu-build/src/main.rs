@@ -400,6 +400,33 @@ fn ste_command(
     Ok(())
 }
 
+/// `ste`'s options as given, before the spec's defaults fill the gaps.
+struct SteOptions {
+    torque_nm: Option<Vec<f64>>,
+    angles: usize,
+    pitches: f64,
+    method: StaticMethod,
+    depth_mm: Option<f64>,
+    p_en: f64,
+    eq20: bool,
+}
+
+/// `ste` with the spec's defaults: its operating torque, and a contact depth of half its module.
+fn ste_with_defaults(spec: &Path, o: SteOptions, resolution: Resolution, out: StePlots) -> Result<()> {
+    let pair = load_pair(spec)?;
+    let torque_nm = o.torque_nm.unwrap_or_else(|| vec![pair.operating_torque_nm]);
+    let depth_m = o.depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
+    let method = match o.method {
+        StaticMethod::PmorHertz => Method::PmorHertz {
+            depth_m,
+            p_en: o.p_en,
+            law: if o.eq20 { ApproachLaw::PaperEq20 } else { ApproachLaw::Weber },
+        },
+        StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
+    };
+    ste_command(spec, &torque_nm, o.angles, o.pitches, method, resolution, out)
+}
+
 /// Where `ste` writes its table and its plot.
 struct StePlots {
     csv: Option<PathBuf>,
@@ -562,6 +589,18 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
         );
     }
     let depth_m = rom.depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(pair), |d| d * 1e-3);
+    // Every spec value reaches the FMU or the build says why not.
+    for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
+        if gear.inertia_overridden {
+            println!(
+                "note: gear{}.inertia_kgm2 = {} kg·m² is not the PMOR-Hertz gear's inertia, which comes from its FE mass; \
+                 the FMU's inertia_{} parameter adds what exceeds the FE value at the bore (hub, shaft share)",
+                i + 1,
+                sig(gear.inertia_kgm2),
+                i + 1
+            );
+        }
+    }
     println!(
         "PMOR-Hertz build of {}: static shapes at T₁ = {} N·m ({}), contact depth h = {} mm, step to be checked at up to {} N·m (4 × the ROM torque, at most the yield torque)",
         pair.name,
@@ -712,8 +751,9 @@ fn pair_and_mesh(spec_path: &Path, r: Resolution) -> Result<(GearPair, MeshSpec)
     pair_and_mesh_or(spec_path, r, None, None)
 }
 
-/// The pair and its mesh: the spec's `[mesh]` section, or `fallback` where the spec has none (the
-/// spec's defaults without a fallback), then the command line's overrides. Where neither the
+/// The pair and its mesh: the keys the spec's `[mesh]` section sets, `fallback`'s values for the
+/// keys it does not set (the spec's defaults without a fallback), then the command line's
+/// overrides. Where neither the
 /// spec nor the command line sets the axial slices, a helical pair gets as many as its contact
 /// depth h (`depth_mm`, default half the module) needs (`MeshSpec::axial_slices_for`).
 fn pair_and_mesh_or(
@@ -726,8 +766,25 @@ fn pair_and_mesh_or(
     let text = std::fs::read_to_string(spec_path)?;
     let table: toml::Table = toml::from_str(&text).context("the spec is not a TOML table")?;
     let spec_mesh = table.get("mesh").and_then(|m| m.as_table());
-    if let (Some(mesh), None) = (fallback, spec_mesh) {
-        spec.mesh = mesh;
+    if let Some(fallback) = fallback {
+        // Key by key: a [mesh] that sets only axial_slices keeps the fallback's 10/10/10.
+        let set = |key: &str| spec_mesh.is_some_and(|m| m.contains_key(key));
+        let m = &mut spec.mesh;
+        if !set("elements_across_tooth") {
+            m.elements_across_tooth = fallback.elements_across_tooth;
+        }
+        if !set("elements_along_profile") {
+            m.elements_along_profile = fallback.elements_along_profile;
+        }
+        if !set("elements_in_rim") {
+            m.elements_in_rim = fallback.elements_in_rim;
+        }
+        if !set("axial_slices") {
+            m.axial_slices = fallback.axial_slices;
+        }
+        if !set("profile_grading") {
+            m.profile_grading = fallback.profile_grading;
+        }
     }
     let slices_set = r.slices.is_some() || spec_mesh.is_some_and(|m| m.contains_key("axial_slices"));
     let m = &mut spec.mesh;
@@ -980,20 +1037,10 @@ fn main() {
         Command::Linearize { fmu, torque_nm, mesh_damping_ratio, positions, count } => {
             linearize_command(&fmu, torque_nm, mesh_damping_ratio, positions, count)
         }
-        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => (|| {
-            let pair = load_pair(&spec)?;
-            let torque_nm = torque_nm.unwrap_or_else(|| vec![pair.operating_torque_nm]);
-            let depth_m = depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
-            let method = match method {
-                StaticMethod::PmorHertz => Method::PmorHertz {
-                    depth_m,
-                    p_en,
-                    law: if eq20 { ApproachLaw::PaperEq20 } else { ApproachLaw::Weber },
-                },
-                StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
-            };
-            ste_command(&spec, &torque_nm, angles, pitches, method, resolution, StePlots { csv, png })
-        })(),
+        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => {
+            let options = SteOptions { torque_nm, angles, pitches, method, depth_mm, p_en, eq20 };
+            ste_with_defaults(&spec, options, resolution, StePlots { csv, png })
+        }
     };
     if let Err(e) = result {
         eprintln!("fmu-build: error: {e:#}");

@@ -44,6 +44,9 @@ pub struct Gear {
     /// The trochoidal root fillet as (radius, half tooth-thickness angle), root circle upwards.
     pub fillet: Vec<(f64, f64)>,
     pub inertia_kgm2: f64,
+    /// Whether the spec gave the inertia (`inertia_kgm2`) instead of the profile's integral.
+    #[serde(default)]
+    pub inertia_overridden: bool,
     /// Radius of the rounded tip edge (the tip-corner body of the contact).
     pub tip_edge_radius_m: f64,
     /// Hand of the helix (gear 1's from the spec, gear 2's the opposite one).
@@ -188,6 +191,15 @@ fn positive_si(field: &str, value: f64, scale: f64) -> Result<f64, SpecError> {
     }
 }
 
+/// `Err` naming the field and the closed range [lo, hi] (`unit_and_why` follows the bounds).
+fn within(field: &str, value: f64, (lo, hi): (f64, f64), unit_and_why: &str) -> Result<(), SpecError> {
+    if (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("must be in [{lo}, {hi}] {unit_and_why}, got {}", sig(value))))
+    }
+}
+
 fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let m = &spec.mesh;
     for (field, value) in [
@@ -202,17 +214,12 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     }
     let rack = &spec.rack;
     let mn = positive_si("rack.module_mm", rack.module_mm, 1e-3)?;
-    if !(MODULE_RANGE_MM.0..=MODULE_RANGE_MM.1).contains(&rack.module_mm) {
-        return Err(invalid(
-            "rack.module_mm",
-            format!(
-                "must be in [{}, {}] mm (the range of gear modules the FE mesh and the Hertz law are sized for), got {}",
-                MODULE_RANGE_MM.0,
-                MODULE_RANGE_MM.1,
-                sig(rack.module_mm)
-            ),
-        ));
-    }
+    within(
+        "rack.module_mm",
+        rack.module_mm,
+        MODULE_RANGE_MM,
+        "mm (the range of gear modules the FE mesh and the Hertz law are sized for)",
+    )?;
     let alpha_n_deg = positive("rack.pressure_angle_deg", rack.pressure_angle_deg)?;
     if alpha_n_deg >= 45.0 {
         return Err(invalid("rack.pressure_angle_deg", "must be below 45°"));
@@ -357,6 +364,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
                 g.teeth as u32,
             ),
             inertia_kgm2: 0.0,
+            inertia_overridden: inertia_override.is_some(),
             tip_edge_radius_m: tip_edge_radius,
             helix_hand,
         };
@@ -502,18 +510,9 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         poisson_ratio: nu,
         density_kg_m3: rho,
         yield_strength_pa: {
-            let y = positive_si("material.yield_strength_mpa", mat.yield_strength_mpa, 1e6)?;
-            if !(YIELD_RANGE_MPA.0..=YIELD_RANGE_MPA.1).contains(&mat.yield_strength_mpa) {
-                return Err(invalid(
-                    "material.yield_strength_mpa",
-                    format!(
-                        "must be in [{}, {}] MPa (gear materials, from plastics to through-hardened steel), got {}",
-                        YIELD_RANGE_MPA.0,
-                        YIELD_RANGE_MPA.1,
-                        sig(mat.yield_strength_mpa)
-                    ),
-                ));
-            }
+            let field = "material.yield_strength_mpa";
+            let y = positive_si(field, mat.yield_strength_mpa, 1e6)?;
+            within(field, mat.yield_strength_mpa, YIELD_RANGE_MPA, "MPa (gear materials, plastics to hardened steel)")?;
             y
         },
         mesh_damping_ratio: zeta,

@@ -110,17 +110,20 @@ def _slave(fmu: Path, unzip: Path, name: str, callbacks=None):
 
 
 def _brake_run(slave, vr, torque_nm, brake, t_end, h=1e-4, ramp_s=2e-3):
-    """Haversine ramp of T₁ to `torque_nm` over `ramp_s`, viscous brake −brake·w_2 fed back each
-    step (explicit coupling, as a master does). Returns rows (t, w_1, w_2, dte)."""
-    rows, t = [], 0.0
-    for _ in range(int(round(t_end / h))):
-        ramp = 1.0 if t >= ramp_s else 0.5 * (1.0 - math.cos(math.pi * t / ramp_s))
-        w_2 = slave.getReal([vr["w_2"]])[0]
-        slave.setReal([vr["tau_1"], vr["tau_2"]], [torque_nm * ramp, -brake * w_2])
-        slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        t += h
-        rows.append((t, *slave.getReal([vr["w_1"], vr["w_2"], vr["dte"]])))
-    return rows
+    """examples/brake_run.py's loop: the tour's own script is what the test runs."""
+    return _brake_run_module().brake_loop(slave, vr, torque_nm, brake, t_end, h, ramp_s)
+
+
+def _brake_run_module():
+    import importlib.util
+    import sys
+
+    if "brake_run" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("brake_run", REPO_ROOT / "examples" / "brake_run.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules["brake_run"] = module
+    return sys.modules["brake_run"]
 
 
 @pytest.mark.parametrize("model", MODELS)
