@@ -37,7 +37,7 @@ run() {
         local r1=${bores%/*} r2=${bores#*/}
         local copy="$tmp/$(basename "$spec" .toml)_$r1-$r2.toml"
         with_bores "$spec" "$r1" "$r2" "$copy"
-        "$B" ste "$copy" --torque-nm "$torques" --angles 41 2>/dev/null | awk -v bores="$r1 / $r2" '
+        "$B" ste "$copy" --torque-nm "$torques" --angles 41 --across 4 --profile 8 --rim 4 2>/dev/null | awk -v bores="$r1 / $r2" '
             function num(s) { gsub(/[^0-9.eE+-]/, "", s); return s }
             function after(key,   i) { for (i = 1; i <= NF; i++) if ($i == key) return num($(i + 1)); return "" }
             function flush() { if (w != "") printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", bores, w, mean, pp, ratio, single, ds, contrast, cratio }

@@ -22,7 +22,8 @@ NSV = re.compile(r"gear (\d): .*n_sv (\d+)")
 
 def ste(spec: str, torques: str, p_en: float) -> tuple[dict[float, tuple[float, float]], list[str]]:
     out = subprocess.run(["./target/release/fmu-build", "ste", f"examples/{spec}", "--torque-nm", torques,
-                          "--angles", "41", "--p-en", str(p_en)], check=True, capture_output=True, text=True).stdout
+                          "--angles", "41", "--p-en", str(p_en),
+                          "--across", "4", "--profile", "8", "--rim", "4"], check=True, capture_output=True, text=True).stdout
     rows = {float(m[1]): (float(m[2]), float(m[3])) for m in LINE.finditer(out)}
     return rows, [m[2] for m in NSV.finditer(out)]
 

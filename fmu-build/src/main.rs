@@ -297,10 +297,9 @@ fn ste_command(
         Method::PmorHertz { depth_m, .. } => Some(depth_m * 1e3),
         Method::Penalty { .. } => None,
     };
-    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, None, depth_mm)?;
+    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, Some(MeshSpec::dynamic_default()), depth_mm)?;
     let started = std::time::Instant::now();
-    let bar = ProgressBar::new_spinner();
-    bar.set_message("reducing both gears");
+    let bar = spinner("reducing both gears".into());
     let reduced = ReducedPair::build(&pair, &mesh_spec, method, |gear, done| {
         bar.set_message(format!("gear {}: {done} partial models", gear + 1))
     })
@@ -338,9 +337,10 @@ fn ste_command(
         let specific_load = t / pair.gear1.pitch_radius_m / b_mm;
         let iso = iso6336::mesh_stiffness_c_gamma_alpha_at(&pair, specific_load);
         println!(
-            "{name} T₁ {t} N·m (w = {specific_load:.1} N/mm): mean STE {mean:.3} µm, peak-to-peak {:.3} µm; \
+            "{name} T₁ {} N·m (w = {specific_load:.1} N/mm): mean STE {mean:.3} µm, peak-to-peak {:.3} µm; \
              mean mesh stiffness {stiffness:.2} N/(mm·µm), ISO 6336-1 c_γα {iso:.2} (ratio {:.3}); \
              mean of the position-wise stiffness {stiffness_mean_of_positions:.2} (ratio {:.3})",
+            sig(t),
             hi - lo,
             stiffness / iso,
             stiffness_mean_of_positions / iso
@@ -498,9 +498,10 @@ fn build(
     rom: &RomOptions,
     resolution: Resolution,
 ) -> Result<()> {
-    // The PMOR-Hertz FMU's accuracy rests on the FE mesh: without a [mesh] section in the spec it
-    // takes the mesh measured to meet the DTE's accuracy, not the coarse one of quick studies.
     check_output_folder(output)?;
+    // The PMOR-Hertz FMU's accuracy rests on the FE mesh: where the spec's [mesh] is silent it
+    // takes the mesh measured to meet the DTE's accuracy (as every command now does); the lumped
+    // model meshes nothing.
     let fallback = matches!(model, ModelChoice::PmorHertz).then(MeshSpec::dynamic_default);
     let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback, rom.depth_mm)?;
     let library = match library {
@@ -630,14 +631,9 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
     let bar = spinner("PMOR-Hertz build".into());
     // Each stage's start, for the report of where the offline time goes.
     let stages = std::sync::Mutex::new(Vec::<(String, std::time::Instant)>::new());
-    // A spinner on a terminal; plain lines otherwise (a log file, CI), so progress is never silent.
-    let plain = !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let (model, report) = build_dynamic_model(pair, mesh, &options, |m| {
         stages.lock().unwrap().push((m.clone(), std::time::Instant::now()));
-        if plain {
-            eprintln!("[{:6.1} s] {m}", started.elapsed().as_secs_f64());
-        }
-        bar.set_message(m)
+        bar.stage(m)
     })
     .map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
@@ -747,8 +743,12 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
 }
 
 /// The pair and its mesh resolution (the spec's [mesh], overridden from the command line).
+/// Every command meshes a spec the way the FMU's build does (`MeshSpec::dynamic_default` for the
+/// keys the spec's `[mesh]` leaves out): the STE `ste` prints is the one the FMU carries, and a
+/// small pair's contact depth reaches past its flank elements on that mesh where the coarse
+/// 4/8/4 (the library's test default) leaves it short.
 fn pair_and_mesh(spec_path: &Path, r: Resolution) -> Result<(GearPair, MeshSpec)> {
-    pair_and_mesh_or(spec_path, r, None, None)
+    pair_and_mesh_or(spec_path, r, Some(MeshSpec::dynamic_default()), None)
 }
 
 /// The pair and its mesh: the keys the spec's `[mesh]` section sets, `fallback`'s values for the
@@ -807,10 +807,53 @@ fn pair_and_mesh_or(
     Ok((pair, mesh))
 }
 
-fn spinner(message: String) -> ProgressBar {
-    let bar = ProgressBar::new_spinner().with_message(message);
+/// Progress of a long command: an indicatif spinner on a terminal; off a terminal (a log file,
+/// CI) plain lines on stderr, at most one a second, so a long build is never silent.
+struct Progress {
+    bar: ProgressBar,
+    plain: bool,
+    started: std::time::Instant,
+    last_line: std::sync::Mutex<Option<std::time::Instant>>,
+}
+
+impl Progress {
+    fn set_message(&self, message: impl Into<String>) {
+        let message = message.into();
+        if self.plain {
+            let mut last = self.last_line.lock().unwrap_or_else(|p| p.into_inner());
+            if last.is_none_or(|at| at.elapsed().as_secs_f64() >= 1.0) {
+                eprintln!("[{:6.1} s] {message}", self.started.elapsed().as_secs_f64());
+                *last = Some(std::time::Instant::now());
+            }
+        }
+        self.bar.set_message(message);
+    }
+
+    /// A stage of the work: off a terminal always printed (stages are few; `set_message`'s
+    /// chatty updates are thinned to one a second).
+    fn stage(&self, message: String) {
+        if self.plain {
+            *self.last_line.lock().unwrap_or_else(|p| p.into_inner()) = None;
+        }
+        self.set_message(message);
+    }
+
+    fn finish_and_clear(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+fn spinner(message: String) -> Progress {
+    let bar = ProgressBar::new_spinner();
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
-    bar
+    let progress = Progress {
+        bar,
+        plain: !std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        started: std::time::Instant::now(),
+        last_line: Default::default(),
+    };
+    progress.set_message(message);
+    progress
 }
 
 fn output_path(stem: &Path, gear: usize, extension: &str) -> PathBuf {

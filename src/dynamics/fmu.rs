@@ -153,14 +153,24 @@ impl Validity {
         }
         if f > self.range_mesh_force_n && !warned[1] {
             warned[1] = true;
+            // The force as a torque on gear 1 (the range's own ratio is r_b1).
+            let torque_now = f * self.range_torque_nm / self.range_mesh_force_n;
+            let advice = if f > self.yield_mesh_force_n {
+                "it is past the yield torque too (above): no model of this pair holds there; lower the load".to_string()
+            } else {
+                format!(
+                    "rebuild with [operating] torque_nm = {} (or fmu-build build --rom-torques-nm {})",
+                    sig(torque_now),
+                    sig(torque_now)
+                )
+            };
             out.push(format!(
-                "mesh force {} N is beyond {} N (T₁ = {} N·m), the largest load this model was built and its \
-                 step checked for: rebuild with [operating] torque_nm (or fmu-build build --rom-torques-nm) \
-                 at about {} N·m",
+                "mesh force {} N (T₁ ≈ {} N·m) is beyond {} N (T₁ = {} N·m), the largest load this model was \
+                 built and its step checked for: {advice}",
                 sig(f),
+                sig(torque_now),
                 sig(self.range_mesh_force_n),
                 sig(self.range_torque_nm),
-                sig(f * self.range_torque_nm / self.range_mesh_force_n / crate::dynamics::pmor::linear::STEP_LOAD_FACTOR)
             ));
         }
         out
@@ -748,5 +758,32 @@ fn energy_balance(stored_j: [f64; 2], integrals_j: [f64; 2]) -> Result<(), Strin
         Err(format!(
             "the energy balance broke: stored {now:.6e} J exceeds {start:.6e} J at the start + {work:.6e} J of input work − {dissipated:.6e} J dissipated (residual {residual:.3e} J, over {ENERGY_BALANCE_SLACK} of the energy in play): the integration diverges; lower max_step"
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Validity;
+
+    /// The validity rules speak once each, and the range rule's advice follows the load: a
+    /// rebuild at the load run (its torque, F·r_b1) below the yield torque, none above it.
+    /// Figures: a pair with r_b1 = 0.05 m, range 1000 N·m (20 kN), yield 2000 N·m (40 kN).
+    #[test]
+    fn each_rule_is_logged_once_with_the_advice_the_load_allows() {
+        let v = Validity { yield_mesh_force_n: 40e3, range_mesh_force_n: 20e3, range_torque_nm: 1000.0 };
+        let mut warned = [false; 2];
+        assert!(v.check(19e3, &mut warned).is_empty());
+        let past_range = v.check(-26e3, &mut warned); // a coast-flank force counts by its size
+        assert_eq!(past_range.len(), 1, "{past_range:?}");
+        assert!(past_range[0].contains("[operating] torque_nm = 1300"), "{}", past_range[0]);
+        assert!(v.check(30e3, &mut warned).is_empty(), "said twice");
+        let past_yield = v.check(50e3, &mut warned);
+        assert_eq!(past_yield.len(), 1, "{past_yield:?}");
+        assert!(past_yield[0].contains("yield strength") && past_yield[0].contains("40000 N"), "{}", past_yield[0]);
+        // Past both at once, on a fresh instance: the range rule advises no rebuild.
+        let mut fresh = [false; 2];
+        let both = v.check(50e3, &mut fresh);
+        assert_eq!(both.len(), 2);
+        assert!(both[1].contains("lower the load") && !both[1].contains("rebuild"), "{}", both[1]);
     }
 }
