@@ -7,11 +7,25 @@ use std::process::Command;
 
 const SPUR: &str = include_str!("../../examples/kurokawa_spur.toml");
 
-/// A unique scratch folder for one test.
-fn scratch(name: &str) -> PathBuf {
+/// A unique scratch folder for one test, removed when the test ends.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn join(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn scratch(name: &str) -> Scratch {
     let dir = std::env::temp_dir().join(format!("gearfmu-cli-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    Scratch(dir)
 }
 
 /// Runs fmu-build; returns (success, stdout + stderr).
@@ -21,12 +35,13 @@ fn fmu_build(args: &[&str]) -> (bool, String) {
     (out.status.success(), text)
 }
 
-/// The spur example with one edit, written to a scratch file.
-fn spec_with(name: &str, from: &str, to: &str) -> PathBuf {
+/// The spur example with one edit, written to a scratch file (removed with the guard).
+fn spec_with(name: &str, from: &str, to: &str) -> (Scratch, PathBuf) {
     assert!(SPUR.contains(from), "{from} not in the example");
-    let path = scratch(name).join("spec.toml");
+    let dir = scratch(name);
+    let path = dir.join("spec.toml");
     std::fs::write(&path, SPUR.replacen(from, to, 1)).unwrap();
-    path
+    (dir, path)
 }
 
 fn refused(args: &[&str], needles: &[&str]) -> String {
@@ -39,7 +54,7 @@ fn refused(args: &[&str], needles: &[&str]) -> String {
 }
 
 fn spec_refused(name: &str, from: &str, to: &str, needles: &[&str]) -> String {
-    let spec = spec_with(name, from, to);
+    let (_dir, spec) = spec_with(name, from, to);
     refused(&["inspect", spec.to_str().unwrap()], needles)
 }
 
@@ -75,7 +90,8 @@ fn a_rom_torque_past_the_yield_torque_is_refused_before_the_build() {
 
 #[test]
 fn an_output_into_a_missing_folder_is_refused_and_no_folder_is_made() {
-    let dir = scratch("missing-folder").join("not-there");
+    let scratch = scratch("missing-folder");
+    let dir = scratch.join("not-there");
     let out = dir.join("x.fmu");
     refused(&["build", EXAMPLE, "-o", out.to_str().unwrap(), "--model", "lumped"], &["does not exist"]);
     assert!(!dir.exists(), "fmu-build made {}", dir.display());
