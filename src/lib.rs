@@ -3,7 +3,7 @@
 //! Offline (fmu-build): `gear` (spec, geometry) → `fe` (FE model per gear) → `rom` (reduction,
 //! statics, the dynamic reductor) or `dynamics` (lumped mesh stiffness) → `model_file` (the only
 //! thing that crosses). Online (the FMU): `fmi2`, the generic FMI layer,
-//! drives `dynamics::fmu` through the model file. See `../shared/design.md`.
+//! drives `dynamics::fmu` through the model file. The method and the code map: `docs/explanation/method.md`.
 
 pub mod contact;
 pub mod dynamics;
