@@ -6,9 +6,7 @@
 //! error until it is added here (and therefore checked).
 
 use gearfmu::fe::gear_mesh::{MeshSpec, ProfileGrading};
-use gearfmu::gear::spec::{
-    GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec,
-};
+use gearfmu::gear::spec::{GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec};
 use gearfmu::gear::{HertzContact, PairSpec};
 
 fn gear(teeth: i64) -> GearSpec {

@@ -73,7 +73,8 @@ fn zero_modes_are_refused_naming_the_option_and_its_range() {
 
 #[test]
 fn a_negative_rom_torque_is_refused_as_a_value_not_an_unknown_flag() {
-    let text = refused(&["build", EXAMPLE, "-o", "x.fmu", "--rom-torques-nm", "-100"], &["--rom-torques-nm", "positive"]);
+    let text =
+        refused(&["build", EXAMPLE, "-o", "x.fmu", "--rom-torques-nm", "-100"], &["--rom-torques-nm", "positive"]);
     assert!(!text.contains("unexpected argument"), "{text}");
 }
 
@@ -120,7 +121,12 @@ fn a_yield_strength_of_one_megapascal_is_refused_naming_the_field() {
 
 #[test]
 fn a_module_of_1e200_is_refused_with_a_short_number() {
-    let text = spec_refused("module", "module_mm = 6.0", "module_mm = 1e200", &["rack.module_mm", "[0.1, 100] mm", "1.00000e200"]);
+    let text = spec_refused(
+        "module",
+        "module_mm = 6.0",
+        "module_mm = 1e200",
+        &["rack.module_mm", "[0.1, 100] mm", "1.00000e200"],
+    );
     assert!(!text.contains("0000000000"), "a 200-digit number in the message:\n{text}");
 }
 
@@ -144,12 +150,7 @@ fn a_large_profile_shift_is_reported_against_the_profile_shift() {
 
 #[test]
 fn an_operating_torque_past_the_yield_torque_is_refused_naming_the_field() {
-    spec_refused(
-        "operating",
-        "torque_nm = 250.0",
-        "torque_nm = 3000.0",
-        &["operating.torque_nm", "yield"],
-    );
+    spec_refused("operating", "torque_nm = 250.0", "torque_nm = 3000.0", &["operating.torque_nm", "yield"]);
 }
 
 #[test]

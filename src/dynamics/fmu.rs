@@ -9,10 +9,10 @@ use super::pmor::{PmorDynamics, PmorOutputs, PmorState};
 use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
 use crate::fmi2::{Model, Phase};
+use crate::gear::sig;
 use crate::interface;
 use crate::model_file::{ModelFile, ModelKind, FILE_NAME};
 use serde::{Deserialize, Serialize};
-use crate::gear::sig;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -362,7 +362,10 @@ impl GearPairFmu {
     fn pmor_stability_limit(&self, model: &PmorModel, place: &PairPlacement, s: &GearPairState) -> Result<f64, String> {
         let p = &s.params;
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
-        if p.mesh_damping_ratio == model.pair.mesh_damping_ratio && p.inertia_1_kgm2 == fe[0] && p.inertia_2_kgm2 == fe[1] {
+        if p.mesh_damping_ratio == model.pair.mesh_damping_ratio
+            && p.inertia_1_kgm2 == fe[0]
+            && p.inertia_2_kgm2 == fe[1]
+        {
             return Ok(model.stability_limit_s);
         }
         let key = [p.inertia_1_kgm2.to_bits(), p.inertia_2_kgm2.to_bits(), p.mesh_damping_ratio.to_bits()];

@@ -30,8 +30,14 @@ fn torque_at_root_stress(pair: &GearPair, share: f64) -> f64 {
     let stress_per_newton = [&pair.gear1, &pair.gear2]
         .iter()
         .map(|gear| {
-            nominal_root_stress(gear, pair.transverse_pressure_angle_rad, pair.face_width_m, transverse, gear.tip_radius_m)
-                .0
+            nominal_root_stress(
+                gear,
+                pair.transverse_pressure_angle_rad,
+                pair.face_width_m,
+                transverse,
+                gear.tip_radius_m,
+            )
+            .0
         })
         .fold(0.0, f64::max);
     let normal_force_n = share * pair.yield_strength_pa / stress_per_newton;
@@ -76,7 +82,8 @@ mod tests {
         let tips = [pair.gear1.tip_radius_m, pair.gear2.tip_radius_m];
         let t = yield_torque_nm(&pair);
         // The guard loads one gear's tip and the mate at the matching radius; load each tip in turn.
-        let radii_at_tip = |i: usize| if i == 0 { [tips[0], pair.gear2.base_radius_m] } else { [pair.gear1.base_radius_m, tips[1]] };
+        let radii_at_tip =
+            |i: usize| if i == 0 { [tips[0], pair.gear2.base_radius_m] } else { [pair.gear1.base_radius_m, tips[1]] };
         let passes = |torque: f64| (0..2).all(|i| check_root_stress(&pair, force_at(torque), radii_at_tip(i)).is_ok());
         assert!(passes(0.995 * t), "refused below the yield torque {t} N·m");
         assert!(!passes(1.005 * t), "accepted above the yield torque {t} N·m");
