@@ -42,7 +42,7 @@ enum ModelChoice {
 }
 
 /// Options of the PMOR-Hertz build (`fmu-build build --model pmor-hertz`). The defaults that depend
-/// on the pair (ROM torque, depth) follow from the spec: see `resolve`.
+/// on the pair (ROM torque, depth) follow from the spec: see `build_rom`.
 #[derive(clap::Args, Clone)]
 struct RomOptions {
     /// Fixed-bore eigenmodes per gear n_k (raised to the end of a cluster of the cyclic spectrum).
@@ -87,9 +87,14 @@ fn count<const LO: usize, const HI: usize>(text: &str) -> Result<usize, String> 
     }
 }
 
+/// A number, or the message clap prints for a value that is none.
+fn number(text: &str) -> Result<f64, String> {
+    text.trim().parse().map_err(|_| format!("`{text}` is not a number"))
+}
+
 /// A positive, finite number (a torque, a length, a time).
 fn positive_number(text: &str) -> Result<f64, String> {
-    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    let v = number(text)?;
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
@@ -99,7 +104,7 @@ fn positive_number(text: &str) -> Result<f64, String> {
 
 /// A share of energy in (0, 1].
 fn energy_share(text: &str) -> Result<f64, String> {
-    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    let v = number(text)?;
     if v > 0.0 && v <= 1.0 {
         Ok(v)
     } else {
@@ -109,7 +114,7 @@ fn energy_share(text: &str) -> Result<f64, String> {
 
 /// A damping ratio in [0, 1).
 fn damping_ratio(text: &str) -> Result<f64, String> {
-    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    let v = number(text)?;
     if (0.0..1.0).contains(&v) {
         Ok(v)
     } else {
@@ -285,22 +290,17 @@ enum Grading {
 /// Reduces the pair, runs the sweep (progress on stderr), prints a summary per torque and writes
 /// the CSV.
 fn ste_command(
-    spec: &Path,
+    pair: &GearPair,
+    mesh_spec: &MeshSpec,
     torques: &[f64],
     angles: usize,
     pitches: f64,
     method: Method,
-    resolution: Resolution,
     out: StePlots,
 ) -> Result<()> {
-    let depth_mm = match method {
-        Method::PmorHertz { depth_m, .. } => Some(depth_m * 1e3),
-        Method::Penalty { .. } => None,
-    };
-    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, Some(MeshSpec::dynamic_default()), depth_mm)?;
     let started = std::time::Instant::now();
     let bar = spinner("reducing both gears".into());
-    let reduced = ReducedPair::build(&pair, &mesh_spec, method, |gear, done| {
+    let reduced = ReducedPair::build(pair, mesh_spec, method, |gear, done| {
         bar.set_message(format!("gear {}: {done} partial models", gear + 1))
     })
     .map_err(anyhow::Error::msg)?;
@@ -335,7 +335,7 @@ fn ste_command(
         let stiffness_mean_of_positions =
             ste.iter().map(|s| t / pair.gear1.base_radius_m / b_mm / s).sum::<f64>() / ste.len() as f64;
         let specific_load = t / pair.gear1.pitch_radius_m / b_mm;
-        let iso = iso6336::mesh_stiffness_c_gamma_alpha_at(&pair, specific_load);
+        let iso = iso6336::mesh_stiffness_c_gamma_alpha_at(pair, specific_load);
         println!(
             "{name} T₁ {} N·m (w = {specific_load:.1} N/mm): mean STE {mean:.3} µm, peak-to-peak {:.3} µm; \
              mean mesh stiffness {stiffness:.2} N/(mm·µm), ISO 6336-1 c_γα {iso:.2} (ratio {:.3}); \
@@ -349,7 +349,7 @@ fn ste_command(
         // bodies' torsion, which the bore radii set; the zone contrast does not.
         let positions: Vec<(f64, usize)> =
             cases.iter().filter(|c| c.torque_nm == t).map(|c| (c.ste_m, c.pairs_in_contact)).collect();
-        if let Some(z) = iso6336::ZoneComparison::from_sweep(&pair, t, &positions) {
+        if let Some(z) = iso6336::ZoneComparison::from_sweep(pair, t, &positions) {
             println!(
                 "  zones: single contact mean STE {:.3} µm ({} positions), double {:.3} µm ({}); \
                  single-zone stiffness {:.2} N/(mm·µm), ISO c′ {:.2} (ratio {:.3}); \
@@ -413,7 +413,7 @@ struct SteOptions {
 
 /// `ste` with the spec's defaults: its operating torque, and a contact depth of half its module.
 fn ste_with_defaults(spec: &Path, o: SteOptions, resolution: Resolution, out: StePlots) -> Result<()> {
-    let pair = load_pair(spec)?;
+    let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, Some(MeshSpec::dynamic_default()), o.depth_mm)?;
     let torque_nm = o.torque_nm.unwrap_or_else(|| vec![pair.operating_torque_nm]);
     let depth_m = o.depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
     let method = match o.method {
@@ -424,7 +424,7 @@ fn ste_with_defaults(spec: &Path, o: SteOptions, resolution: Resolution, out: St
         },
         StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
     };
-    ste_command(spec, &torque_nm, o.angles, o.pitches, method, resolution, out)
+    ste_command(&pair, &mesh_spec, &torque_nm, o.angles, o.pitches, method, out)
 }
 
 /// Where `ste` writes its table and its plot.
@@ -608,7 +608,7 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
         rom_torques_nm.iter().map(|t| sig(*t)).collect::<Vec<_>>().join(", "),
         if rom.rom_torques_nm.is_some() { "--rom-torques-nm" } else { "the spec's operating torque" },
         sig(depth_m * 1e3),
-        sig((gearfmu::dynamics::pmor::linear::STEP_LOAD_FACTOR * rom_torques_nm.iter().cloned().fold(0.0, f64::max)).min(yield_torque))
+        sig(gearfmu::dynamics::pmor::linear::step_load_ceiling_of(pair, &rom_torques_nm))
     );
     let options = DynamicBuildOptions {
         modes: rom.modes,
@@ -767,24 +767,11 @@ fn pair_and_mesh_or(
     let table: toml::Table = toml::from_str(&text).context("the spec is not a TOML table")?;
     let spec_mesh = table.get("mesh").and_then(|m| m.as_table());
     if let Some(fallback) = fallback {
-        // Key by key: a [mesh] that sets only axial_slices keeps the fallback's 10/10/10.
-        let set = |key: &str| spec_mesh.is_some_and(|m| m.contains_key(key));
-        let m = &mut spec.mesh;
-        if !set("elements_across_tooth") {
-            m.elements_across_tooth = fallback.elements_across_tooth;
-        }
-        if !set("elements_along_profile") {
-            m.elements_along_profile = fallback.elements_along_profile;
-        }
-        if !set("elements_in_rim") {
-            m.elements_in_rim = fallback.elements_in_rim;
-        }
-        if !set("axial_slices") {
-            m.axial_slices = fallback.axial_slices;
-        }
-        if !set("profile_grading") {
-            m.profile_grading = fallback.profile_grading;
-        }
+        // Key by key: the spec's [mesh] keys over the fallback's (a [mesh] that sets only
+        // axial_slices keeps the fallback's 10/10/10), read back through the spec's own type.
+        let mut merged = toml::Table::try_from(fallback).context("the fallback mesh as TOML")?;
+        merged.extend(spec_mesh.cloned().unwrap_or_default());
+        spec.mesh = merged.try_into().context("the spec's [mesh] section")?;
     }
     let slices_set = r.slices.is_some() || spec_mesh.is_some_and(|m| m.contains_key("axial_slices"));
     let m = &mut spec.mesh;

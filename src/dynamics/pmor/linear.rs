@@ -55,8 +55,13 @@ pub fn linearization_torque_nm(model: &crate::dynamics::pmor::model::PmorModel) 
 /// `STEP_LOAD_FACTOR` × the largest ROM torque, but no more than the pair's yield torque
 /// (`gear::rating`): beyond it the teeth yield and no linear-elastic model holds.
 pub fn step_load_ceiling_nm(model: &crate::dynamics::pmor::model::PmorModel) -> f64 {
-    let rom = model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    (STEP_LOAD_FACTOR * rom).min(crate::gear::rating::yield_torque_nm(&model.pair).max(rom))
+    step_load_ceiling_of(&model.pair, &model.info.rom_torques_nm)
+}
+
+/// [`step_load_ceiling_nm`] of a pair built at `rom_torques_nm` (before its model exists).
+pub fn step_load_ceiling_of(pair: &crate::gear::GearPair, rom_torques_nm: &[f64]) -> f64 {
+    let rom = rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    (STEP_LOAD_FACTOR * rom).min(crate::gear::rating::yield_torque_nm(pair).max(rom))
 }
 
 /// Each retry of the build's linearization lowers the load by this factor.
