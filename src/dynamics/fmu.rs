@@ -566,31 +566,39 @@ impl Model for GearPairFmu {
     fn get_real(&self, s: &GearPairState, vr: u32) -> Result<f64, String> {
         let var = self.var(vr)?;
         let rb = self.base_radii();
-        // The mechanical outputs of the model kind: angles, speeds, force, stiffness.
-        let (theta, omega, force, stiffness) = match &self.physics {
+        // The mechanical outputs of the model kind: the ports' angles and speeds, the bores'
+        // angles (the DTE is bore to bore), force, stiffness.
+        let bores_and_ports = |bore: [f64; 2], port: [(f64, f64); 2]| (bore, port.map(|p| p.0), port.map(|p| p.1));
+        let ((bore, theta, omega), force, stiffness) = match &self.physics {
             Physics::Lumped(mesh) => {
                 let m = LumpedModel::new(mesh, s.params).mesh_state(&s.mech);
-                ([s.mech.theta_1, s.mech.theta_2], [s.mech.omega_1, s.mech.omega_2], m.force_n, m.stiffness_n_per_m)
+                let theta = [s.mech.theta_1, s.mech.theta_2];
+                ((theta, theta, [s.mech.omega_1, s.mech.omega_2]), m.force_n, m.stiffness_n_per_m)
             }
-            Physics::PmorHertz { .. } => {
+            Physics::PmorHertz { model, place } => {
                 let needs_contact = matches!(var, Var::MeshForce | Var::MeshStiffness);
+                let ports = |p: &PmorState| -> Result<_, String> {
+                    let dynamics = self.pmor(model, place, s);
+                    Ok(bores_and_ports(p.theta, [dynamics.port(0, p)?, dynamics.port(1, p)?]))
+                };
                 match &s.pmor {
-                    Some(p) if !needs_contact => (p.theta, p.omega, f64::NAN, f64::NAN),
-                    // Before initialization the pair sits at its start values with η = 0: angles
-                    // and speeds need no contact evaluation, which a start angle pressing the
-                    // flanks beyond Hertz's range would refuse (found by fuzzing: a GetReal of
-                    // tau_1 failed on it).
+                    Some(p) if !needs_contact => (ports(p)?, f64::NAN, f64::NAN),
+                    // Before initialization the pair sits at its start values with η = 0 (port
+                    // = bore): angles and speeds need no contact evaluation, which a start angle
+                    // pressing the flanks beyond Hertz's range would refuse (found by fuzzing: a
+                    // GetReal of tau_1 failed on it).
                     None if !needs_contact => {
-                        ([s.mech.theta_1, s.mech.theta_2], [s.mech.omega_1, s.mech.omega_2], f64::NAN, f64::NAN)
+                        let theta = [s.mech.theta_1, s.mech.theta_2];
+                        ((theta, theta, [s.mech.omega_1, s.mech.omega_2]), f64::NAN, f64::NAN)
                     }
                     _ => {
                         let (out, p) = self.pmor_outputs(s)?.expect("PMOR-Hertz physics");
-                        (p.theta, p.omega, out.contact.normal_force_n, out.contact.tangent_stiffness_n_per_m)
+                        (ports(&p)?, out.contact.normal_force_n, out.contact.tangent_stiffness_n_per_m)
                     }
                 }
             }
         };
-        let te = rb[0] * theta[0] - rb[1] * theta[1];
+        let te = rb[0] * bore[0] - rb[1] * bore[1];
         Ok(match var {
             Var::Tau1 => s.torques_nm[0],
             Var::Tau2 => s.torques_nm[1],

@@ -287,6 +287,39 @@ impl<'a> PmorDynamics<'a> {
         Ok((dy, out))
     }
 
+    /// The port of gear i: the angle and speed a master reads (rad, rad/s). The bore is the
+    /// floating frame and, on its own, carries about 1–2 % of the gear's inertia (the rest sits
+    /// on the rim behind the web's first torsional mode): at the bore, a 40–60 kHz hub mode
+    /// rings, and an explicit master that feeds a torque back from the bore's speed (a brake, a
+    /// stiff shaft) destabilizes it at ordinary steps. The port is the gear's mean axis instead
+    /// (Tisserand's frame, to first order in η): φ = θ + (Gx)ᵀM·u / J with J the whole rigid
+    /// inertia at the bore (the FE body's and the added), u = Φη_Φ + Σₐ wₐ S_a η_Ψ, and ω = φ̇
+    /// exactly. Jω is then the gear's angular momentum up to second-order terms in η, so the
+    /// master's torque, applied at the bore as before, changes the port's speed through the
+    /// whole inertia: the port behaves as a rigid body at every frequency a master resolves.
+    /// The DTE stays bore to bore, as `fmu-build ste` measures it.
+    pub fn port(&self, i: usize, s: &PmorState) -> Result<(f64, f64), String> {
+        let g = &self.model.gears[i];
+        let st = self.stencil(i, s.anchor[i], s.theta[i])?;
+        let n_k = g.modes();
+        let (eta_phi, eta_psi) = s.eta[i].split_at(n_k);
+        let (etad_phi, etad_psi) = s.eta_dot[i].split_at(n_k);
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let mut moment = dot(g.gx_phi.as_slice(), eta_phi);
+        let mut moment_rate = dot(g.gx_phi.as_slice(), etad_phi);
+        for a in 0..4 {
+            let (w, dw) = (st.weights.w[a], st.weights.dw[a] / st.step);
+            if w == 0.0 && dw == 0.0 {
+                continue;
+            }
+            let gx_s = g.sample[st.a0 + a].gx_s.as_slice();
+            moment += w * dot(gx_s, eta_psi);
+            moment_rate += w * dot(gx_s, etad_psi) + s.omega[i] * dw * dot(gx_s, eta_psi);
+        }
+        let inertia = g.polar_inertia_kgm2 + self.added_inertia_kgm2[i];
+        Ok((s.theta[i] + moment / inertia, s.omega[i] + moment_rate / inertia))
+    }
+
     /// Energies and contact at a state.
     pub fn outputs(&self, s: &PmorState) -> Result<PmorOutputs, String> {
         Ok(self.rhs(&self.pack(s), s.anchor, [0.0; 2])?.1)
