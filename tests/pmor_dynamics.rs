@@ -8,7 +8,7 @@ mod common;
 
 use gearfmu::contact::hertz::ApproachLaw;
 use gearfmu::contact::mesh_kinematics::PairPlacement;
-use gearfmu::dynamics::pmor::equations::{gear_terms, interval_gram, Damping};
+use gearfmu::dynamics::pmor::equations::{gear_terms, interval_gram, Damping, GearTerms};
 use gearfmu::dynamics::pmor::integrator::Integrator;
 use gearfmu::dynamics::pmor::model::PmorModel;
 use gearfmu::dynamics::pmor::{linear, PmorDynamics, PmorState};
@@ -107,7 +107,8 @@ fn reduced_gears_match_the_fe_model_and_close_periodically() {
         // Φ's frequencies in the reduced model: the Φ block of (VᵀKV, VᵀMV) at a frozen angle.
         let st = g.stencil(f.model.interpolation, 0.37 * g.pitch_rad()).unwrap();
         let n_e = g.elastic_size();
-        let terms = gear_terms(
+        let mut terms = GearTerms::new(g);
+        gear_terms(
             g,
             &st,
             &interval_gram(g, st.a0),
@@ -115,6 +116,7 @@ fn reduced_gears_match_the_fe_model_and_close_periodically() {
             0.0,
             &vec![0.0; n_e],
             Damping { modes_ratio: 0.0, shapes_ratio: 0.0 },
+            &mut terms,
         );
         let m_phi = terms.mass.view((1, 1), (g.modes(), g.modes())).into_owned();
         let k_phi = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&g.eigenvalues));
@@ -490,28 +492,32 @@ fn verlet_at_its_default_step(f: &Fixture) -> (PmorDynamics<'_>, f64) {
 }
 
 /// Velocity Verlet (`--integrator verlet`) at its own default step, 0.6 of its stability limit
-/// on the linearized pair (evidence: the same first integral as above, point loads). It is
-/// second order, so its energy error is a bounded oscillation of size (ωh)² in the modes that
-/// ring, not a drift: halving the step divides it by about four (asserted ≥ 3), and at the
-/// default step it stays within 1e-4 of the total.
+/// on the linearized pair (evidence: the same first integral as above, point loads): at the
+/// default step the energy stays within 1e-4 of the total. It is second order, so its energy
+/// error is a bounded oscillation of size (ωh)² in the modes that ring, not a drift: halving the
+/// step divides it by about four (asserted ≥ 3) — checked from half the default step to a
+/// quarter. At the default step itself the stiffest mode (the shapes against the contact,
+/// ≈ 100 kHz) sits at ωh ≈ 1, outside the asymptotic range: there the error is not monotone in h
+/// (measured 6.7e-3 J at 1.4 µs, 4.3e-3 J at 1.7 µs, 1.6e-3 J at 0.85 µs, 1.9e-4 J at 0.43 µs).
 #[test]
 fn velocity_verlet_keeps_the_energy_at_the_default_step() {
     use gearfmu::dynamics::pmor::contact::Loading;
     let f = fixture();
     let m = &f.model;
     let (_, h) = verlet_at_its_default_step(f);
-    let (drift, vib, e0, anchors) = undamped_energy_drift(m, &f.place, h, Loading::Point, Integrator::Verlet);
-    let (drift_half, _, _, _) = undamped_energy_drift(m, &f.place, 0.5 * h, Loading::Point, Integrator::Verlet);
+    let drift_at = |h: f64| undamped_energy_drift(m, &f.place, h, Loading::Point, Integrator::Verlet);
+    let (drift, vib, e0, anchors) = drift_at(h);
+    let (drift_half, drift_quarter) = (drift_at(0.5 * h).0, drift_at(0.25 * h).0);
     eprintln!(
-        "velocity Verlet energy (point loads): at {:.2} µs max |E − E₀| {drift:.3e} J ({:.2e} of total, {:.2e} of the peak vibration energy); at half the step {drift_half:.3e} J (ratio {:.2})",
+        "velocity Verlet energy (point loads): at {:.2} µs max |E − E₀| {drift:.3e} J ({:.2e} of total, {:.2e} of the peak vibration energy); at half the step {drift_half:.3e} J, at a quarter {drift_quarter:.3e} J (ratio {:.2})",
         h * 1e6,
         drift / e0.abs(),
         drift / vib,
-        drift / drift_half
+        drift_half / drift_quarter
     );
     assert!(anchors[1] >= 10);
     assert!(drift < 1e-4 * e0.abs(), "within the issue's 1e-4 of the total");
-    assert!(drift / drift_half > 3.0, "second order: halving the step must divide the error by about four");
+    assert!(drift_half / drift_quarter > 3.0, "second order: halving the step must divide the error by about four");
 }
 
 /// Velocity Verlet's energy balance with damping and a net torque (evidence: the balance law

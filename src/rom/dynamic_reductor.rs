@@ -536,6 +536,12 @@ pub fn build_dynamic_model(
             gphi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(gphi(r), phic(c))]),
             phi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(phic(r), phic(c))]),
             sample,
+            shape_damping_roots: (0..pairs.len() / 7)
+                .map(|a| {
+                    let p = pairs[a * 7 + 3].as_ref().expect("each stored sample pairs with itself");
+                    crate::dynamics::pmor::equations::modal_damping_root(&p.s_s, &p.k_ss)
+                })
+                .collect(),
             pair: pairs,
             flanks,
         });

@@ -24,6 +24,8 @@ pub struct Stencil {
     pub weights: Weights,
     /// Δϑ (rad).
     pub step: f64,
+    /// p = (ϑ − ϑ_s)/Δϑ ∈ [0, 1): where in the interval ϑ lies (the linear weights 1 − p, p).
+    pub fraction: f64,
 }
 
 impl PmorGear {
@@ -36,26 +38,24 @@ impl PmorGear {
             return Err(format!("reference angle {theta_ref} rad is outside the stored samples"));
         }
         let p = x - s;
-        Ok(Stencil { a0: (s as i64 + 1) as usize, weights: interpolation.weights(p), step })
+        Ok(Stencil { a0: (s as i64 + 1) as usize, weights: interpolation.weights(p), step, fraction: p })
     }
 
     /// The displacement u = Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ of node k of `flank` (gear frame) and
     /// its derivative ∂u/∂ϑ at fixed η (the shapes' interpolation turning with the gear).
     pub fn node_displacement(&self, flank: Flank, st: &Stencil, node: usize, eta: &[f64]) -> ([f64; 3], [f64; 3]) {
         let rows = self.flank(flank);
-        let n_k = self.modes();
-        let (eta_phi, eta_psi) = eta.split_at(n_k);
+        let (eta_phi, eta_psi) = eta.split_at(self.modes());
         let (mut u, mut du) = ([0.0; 3], [0.0; 3]);
         for c in 0..3 {
             let r = 3 * node + c;
-            u[c] = (0..n_k).map(|j| rows.phi[(r, j)] * eta_phi[j]).sum();
+            u[c] = dot(rows.phi_row(r), eta_phi);
             for a in 0..4 {
                 let (w, dw) = (st.weights.w[a], st.weights.dw[a] / st.step);
                 if w == 0.0 && dw == 0.0 {
                     continue;
                 }
-                let s = &rows.shapes[st.a0 + a];
-                let v: f64 = (0..self.shapes).map(|t| s[(r, t)] * eta_psi[t]).sum();
+                let v = dot(rows.shape_row(st.a0 + a, r), eta_psi);
                 u[c] += w * v;
                 du[c] += dw * v;
             }
@@ -79,24 +79,35 @@ impl PmorGear {
     pub fn basis_row(&self, flank: Flank, st: &Stencil, node: usize, dir: [f64; 3], out: &mut [f64]) {
         let rows = self.flank(flank);
         let n_k = self.modes();
-        for (j, o) in out[..n_k].iter_mut().enumerate() {
-            *o = (0..3).map(|c| dir[c] * rows.phi[(3 * node + c, j)]).sum();
-        }
-        for t in 0..self.shapes {
-            let mut v = 0.0;
+        let (phi_part, shape_part) = out.split_at_mut(n_k);
+        phi_part.fill(0.0);
+        shape_part.fill(0.0);
+        for (c, &d) in dir.iter().enumerate() {
+            let r = 3 * node + c;
+            axpy(d, rows.phi_row(r), phi_part);
             for a in 0..4 {
                 let w = st.weights.w[a];
                 if w != 0.0 {
-                    let s = &rows.shapes[st.a0 + a];
-                    v += w * (0..3).map(|c| dir[c] * s[(3 * node + c, t)]).sum::<f64>();
+                    axpy(w * d, rows.shape_row(st.a0 + a, r), shape_part);
                 }
             }
-            out[n_k + t] = v;
         }
     }
 }
 
-/// One gear's inertia, elastic and damping terms at a state.
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// y += a·x.
+#[inline]
+fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
+    y.iter_mut().zip(x).for_each(|(y, x)| *y += a * x);
+}
+
+/// One gear's inertia, elastic and damping terms at a state, and the work space they are
+/// computed in: sized once per gear ([`GearTerms::new`]), so that no step allocates.
 pub struct GearTerms {
     /// M(q): (1 + n_e)² over (θ, η).
     pub mass: DMatrix<f64>,
@@ -107,10 +118,39 @@ pub struct GearTerms {
     /// The damping force Dq̇ over (θ, η) (zero on θ). Its power q̇ᵀDq̇ is the dissipation RK4
     /// integrates; velocity Verlet books its work on the step's own displacement instead.
     pub damping_force: DVector<f64>,
+    /// The coefficient vectors [c_θ, C_η·η̇, Ċ·q̇] (n_b × 3) and N times them.
+    coefficients: DMatrix<f64>,
+    products: DMatrix<f64>,
+    /// K_Ψ(ϑ), ∂K_Ψ/∂ϑ and the shape damping D_Ψ(ϑ) (n_t × n_t).
+    k_psi: DMatrix<f64>,
+    dk_psi: DMatrix<f64>,
+    d_psi: DMatrix<f64>,
+}
+
+impl GearTerms {
+    pub fn new(gear: &PmorGear) -> Self {
+        let (n_k, n_t) = (gear.modes(), gear.shapes);
+        let (n_q, n_b) = (1 + n_k + n_t, 1 + 2 * n_k + 8 * n_t);
+        GearTerms {
+            mass: DMatrix::zeros(n_q, n_q),
+            force: DVector::zeros(n_q),
+            kinetic_j: 0.0,
+            elastic_j: 0.0,
+            damping_force: DVector::zeros(n_q),
+            coefficients: DMatrix::zeros(n_b, 3),
+            products: DMatrix::zeros(n_b, 3),
+            k_psi: DMatrix::zeros(n_t, n_t),
+            dk_psi: DMatrix::zeros(n_t, n_t),
+            d_psi: DMatrix::zeros(n_t, n_t),
+        }
+    }
 }
 
 /// Modal damping as a fraction of critical at each coordinate's own frequency: on Φ,
-/// D_Φ = diag(2ζ_Φ ω_j); on the (mass-orthonormal) shapes, D_Ψ = 2ζ_Ψ·K_Ψ(ϑ)^½.
+/// D_Φ = diag(2ζ_Φ ω_j); on the shapes, at each stored sample a, D_a = 2ζ_Ψ·M_a V√Λ Vᵀ M_a with
+/// K_a v = λ M_a v (the shapes' own modal mass M_a: the Gram matrix of the sample's shapes,
+/// which are of unit mass each but not mutually orthogonal), interpolated linearly in ϑ
+/// ([`PmorGear::shape_damping_roots`]).
 ///
 /// Why not the paper's stiffness-proportional damping (Table 9: ζ at the lowest eigenfrequency,
 /// D = βK): it damps a shape at 35 kHz with ζ ≈ 0.7 and, through the shapes' small effective
@@ -121,6 +161,20 @@ pub struct GearTerms {
 pub struct Damping {
     pub modes_ratio: f64,
     pub shapes_ratio: f64,
+}
+
+/// M·V·√Λ·Vᵀ·M for the pencil (K, M), V M-orthonormal: the damping matrix that gives every mode
+/// of the pencil the ratio ½ (a damping ratio ζ is 2ζ times it). With M = LLᵀ and
+/// L⁻¹KL⁻ᵀ = QΛQᵀ it is L·Q√ΛQᵀ·Lᵀ: positive semi-definite by construction.
+pub fn modal_damping_root(mass: &DMatrix<f64>, stiffness: &DMatrix<f64>) -> DMatrix<f64> {
+    let l = mass.clone().cholesky().expect("the shapes' Gram matrix is positive definite").l();
+    let l_inv = l.clone().try_inverse().expect("a Cholesky factor is invertible");
+    let a = &l_inv * stiffness * l_inv.transpose();
+    let eig = nalgebra::SymmetricEigen::new((&a + a.transpose()) * 0.5);
+    let root = &eig.eigenvectors
+        * DMatrix::from_diagonal(&eig.eigenvalues.map(|x| x.max(0.0).sqrt()))
+        * eig.eigenvectors.transpose();
+    &l * root * l.transpose()
 }
 
 /// N = BᵀMB of the interval whose stencil starts at stored sample `a0`: the Gram matrix of
@@ -174,9 +228,15 @@ pub fn interval_gram(gear: &PmorGear, a0: usize) -> DMatrix<f64> {
     nm
 }
 
-/// M(q), Q_v, ∂U/∂q and damping of one gear. `eta`, `eta_dot`: n_k + n_t; `omega` = θ̇.
-/// `nm` is [`interval_gram`] of the stencil's interval (callers cache it: it changes only when ϑ
-/// crosses a sample).
+/// M(q), Q_v, ∂U/∂q and damping of one gear, into `out`. `eta`, `eta_dot`: n_k + n_t;
+/// `omega` = θ̇. `nm` is [`interval_gram`] of the stencil's interval (callers cache it: it
+/// changes only when ϑ crosses a sample).
+///
+/// With c = C(q)q̇ = θ̇·c_θ + C_η·η̇ (c_θ the θ column of C, C_η its constant η columns) the three
+/// products with N that everything needs are taken at once: N·[c_θ, C_η η̇, Ċq̇]. Then
+/// y = Nc = θ̇·Nc_θ + N C_η η̇, the mass matrix's θ row is Cᵀ(Nc_θ), its ηη block C_ηᵀNC_η reads
+/// N's blocks directly, and CᵀN(Ċq̇) is Cᵀ of the third product.
+#[allow(clippy::too_many_arguments)]
 pub fn gear_terms(
     gear: &PmorGear,
     st: &Stencil,
@@ -185,125 +245,127 @@ pub fn gear_terms(
     omega: f64,
     eta_dot: &[f64],
     damping: Damping,
-) -> GearTerms {
+    out: &mut GearTerms,
+) {
     let (n_k, n_t) = (gear.modes(), gear.shapes);
-    let n_q = 1 + n_k + n_t;
-    let n_b = 1 + 2 * n_k + 8 * n_t;
     let (gphi, phi) = (1, 1 + n_k);
     let gs = |a: usize| 1 + 2 * n_k + a * n_t;
     let sc = |a: usize| 1 + 2 * n_k + 4 * n_t + a * n_t;
-    let (w, dw, ddw) = (st.weights.w, st.weights.dw, st.weights.ddw);
     let d = st.step;
+    let w = st.weights.w;
+    let dw = st.weights.dw.map(|x| x / d);
+    let ddw = st.weights.ddw.map(|x| x / (d * d));
 
     let (eta_phi, eta_psi) = eta.split_at(n_k);
     let (etad_phi, etad_psi) = eta_dot.split_at(n_k);
-    // C(q) is sparse: its θ column is dense, its η_Φ columns are unit vectors on the Φ rows and
-    // its η_Ψ columns are wₐ on the S_a rows. C·x and Cᵀ·v are written out.
-    let apply_c = |x: &DVector<f64>| -> DVector<f64> {
-        let mut c = DVector::<f64>::zeros(n_b);
-        c[0] = x[0];
-        for j in 0..n_k {
-            c[gphi + j] = x[0] * eta_phi[j];
-            c[phi + j] = x[1 + j];
+
+    // The coefficient vectors: C's θ column c_θ, C_η·η̇ and Ċq̇ (zero where not set).
+    let cf = &mut out.coefficients;
+    cf.fill(0.0);
+    cf[(0, 0)] = 1.0;
+    for j in 0..n_k {
+        cf[(gphi + j, 0)] = eta_phi[j];
+        cf[(phi + j, 1)] = etad_phi[j];
+        cf[(gphi + j, 2)] = omega * etad_phi[j];
+    }
+    for a in 0..4 {
+        for m in 0..n_t {
+            cf[(gs(a) + m, 0)] = w[a] * eta_psi[m];
+            cf[(sc(a) + m, 0)] = dw[a] * eta_psi[m];
+            cf[(sc(a) + m, 1)] = w[a] * etad_psi[m];
+            cf[(gs(a) + m, 2)] = omega * omega * dw[a] * eta_psi[m] + omega * w[a] * etad_psi[m];
+            cf[(sc(a) + m, 2)] = omega * omega * ddw[a] * eta_psi[m] + 2.0 * omega * dw[a] * etad_psi[m];
         }
-        for a in 0..4 {
-            for m in 0..n_t {
-                c[gs(a) + m] = x[0] * w[a] * eta_psi[m];
-                c[sc(a) + m] = x[0] * dw[a] / d * eta_psi[m] + w[a] * x[1 + n_k + m];
-            }
-        }
-        c
-    };
-    let apply_ct = |v: &[f64]| -> DVector<f64> {
-        let mut r = DVector::<f64>::zeros(n_q);
-        let mut t = v[0];
-        for j in 0..n_k {
-            t += eta_phi[j] * v[gphi + j];
-            r[1 + j] = v[phi + j];
-        }
-        for a in 0..4 {
-            for m in 0..n_t {
-                t += w[a] * eta_psi[m] * v[gs(a) + m] + dw[a] / d * eta_psi[m] * v[sc(a) + m];
-                r[1 + n_k + m] += w[a] * v[sc(a) + m];
-            }
+    }
+    out.products.gemm(1.0, nm, cf, 0.0);
+    let (cf, z) = (&out.coefficients, &out.products);
+    // y = Nc and T = ½cᵀNc.
+    let y = |k: usize| omega * z[(k, 0)] + z[(k, 1)];
+    let mut kinetic = 0.0;
+    for k in 0..cf.nrows() {
+        kinetic += (omega * cf[(k, 0)] + cf[(k, 1)]) * y(k);
+    }
+    out.kinetic_j = 0.5 * kinetic;
+    // Cᵀv of column `col` of the products: (c_θᵀv, v_Φ, Σₐ wₐ v_{S_a}).
+    let apply_ct = |col: usize, r: &mut [f64]| {
+        let mut t = 0.0;
+        for k in 0..cf.nrows() {
+            t += cf[(k, 0)] * z[(k, col)];
         }
         r[0] = t;
-        r
+        for j in 0..n_k {
+            r[1 + j] = z[(phi + j, col)];
+        }
+        for m in 0..n_t {
+            r[1 + n_k + m] = (0..4).map(|a| w[a] * z[(sc(a) + m, col)]).sum();
+        }
     };
-    let mut qd = DVector::<f64>::zeros(n_q);
-    qd[0] = omega;
-    qd.rows_mut(1, n_k + n_t).copy_from_slice(eta_dot);
-    let c = apply_c(&qd);
-    let y = nm * &c;
-    let kinetic = 0.5 * c.dot(&y);
-    // M = CᵀNC column by column: N·C·e_j is a product only for the θ column.
-    let mut mass = DMatrix::<f64>::zeros(n_q, n_q);
-    let mut e = DVector::<f64>::zeros(n_q);
-    e[0] = 1.0;
-    let col = apply_ct((nm * apply_c(&e)).as_slice());
-    mass.set_column(0, &col);
-    // N's columns as slices (column-major storage).
-    let nm_column = |j: usize| &nm.as_slice()[j * n_b..(j + 1) * n_b];
-    for j in 0..n_k {
-        mass.set_column(1 + j, &apply_ct(nm_column(phi + j)));
+
+    // M = CᵀNC: the θ row from Nc_θ, the ηη block from N's blocks.
+    let mass = &mut out.mass;
+    // The θ row, through the damping force's buffer (set below).
+    let theta_row = out.damping_force.as_mut_slice();
+    apply_ct(0, theta_row);
+    for (k, &v) in theta_row.iter().enumerate() {
+        mass[(0, k)] = v;
+        mass[(k, 0)] = v;
+    }
+    for i in 0..n_k {
+        for j in i..n_k {
+            let v = nm[(phi + i, phi + j)];
+            mass[(1 + i, 1 + j)] = v;
+            mass[(1 + j, 1 + i)] = v;
+        }
+        for m in 0..n_t {
+            let v: f64 = (0..4).map(|a| w[a] * nm[(phi + i, sc(a) + m)]).sum();
+            mass[(1 + i, 1 + n_k + m)] = v;
+            mass[(1 + n_k + m, 1 + i)] = v;
+        }
     }
     for m in 0..n_t {
-        let mut nc = vec![0.0; n_b];
-        for a in 0..4 {
-            if w[a] != 0.0 {
-                for (x, v) in nc.iter_mut().zip(nm_column(sc(a) + m)) {
-                    *x += w[a] * v;
+        for n in m..n_t {
+            let mut v = 0.0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    v += w[a] * w[b] * nm[(sc(a) + m, sc(b) + n)];
                 }
             }
+            mass[(1 + n_k + m, 1 + n_k + n)] = v;
+            mass[(1 + n_k + n, 1 + n_k + m)] = v;
         }
-        mass.set_column(1 + n_k + m, &apply_ct(&nc));
     }
-    let mass = (&mass + mass.transpose()) * 0.5;
 
-    // ∂T/∂q − Ċᵀy.
-    let mut force = DVector::<f64>::zeros(n_q);
-    let mut f_theta = 0.0;
+    // ∂T/∂q − Ċᵀy − CᵀN(Ċq̇). Of ∂T/∂θ and Ċᵀy, the terms in w′ and w″ cancel; what is left:
+    // on θ, −Σ y_{GΦ}·η̇_Φ − Σ y_{GS_a}·wₐη̇_Ψ; on η_Φ, θ̇·y_{GΦ}; on η_Ψ, θ̇·Σₐ wₐ y_{GS_a}.
+    let force = &mut out.force;
+    apply_ct(2, force.as_mut_slice());
+    force.neg_mut();
     for j in 0..n_k {
-        force[1 + j] += y[gphi + j] * omega; // ∂T/∂η_Φ
-        f_theta -= y[gphi + j] * etad_phi[j]; // Ċᵀy, θ row
+        let yg = y(gphi + j);
+        force[1 + j] += yg * omega;
+        force[0] -= yg * etad_phi[j];
     }
     for a in 0..4 {
         for m in 0..n_t {
-            let (yg, ys) = (y[gs(a) + m], y[sc(a) + m]);
-            // ∂T/∂θ
-            f_theta += yg * omega * dw[a] / d * eta_psi[m]
-                + ys * (omega * ddw[a] / (d * d) * eta_psi[m] + dw[a] / d * etad_psi[m]);
-            // ∂T/∂η_Ψ
-            force[1 + n_k + m] += yg * omega * w[a] + ys * omega * dw[a] / d;
-            // Ċᵀy
-            f_theta -= yg * (dw[a] * omega / d * eta_psi[m] + w[a] * etad_psi[m])
-                + ys * (ddw[a] * omega / (d * d) * eta_psi[m] + dw[a] / d * etad_psi[m]);
-            force[1 + n_k + m] -= ys * dw[a] * omega / d;
+            let yg = y(gs(a) + m);
+            force[0] -= yg * w[a] * etad_psi[m];
+            force[1 + n_k + m] += yg * omega * w[a];
         }
     }
-    force[0] += f_theta;
-    // − CᵀN(Ċq̇).
-    let mut cdq = DVector::<f64>::zeros(n_b);
-    for j in 0..n_k {
-        cdq[gphi + j] = omega * etad_phi[j];
-    }
-    for a in 0..4 {
-        for m in 0..n_t {
-            cdq[gs(a) + m] = omega * omega * dw[a] / d * eta_psi[m] + omega * w[a] * etad_psi[m];
-            cdq[sc(a) + m] = omega * omega * ddw[a] / (d * d) * eta_psi[m] + 2.0 * omega * dw[a] / d * etad_psi[m];
-        }
-    }
-    force -= apply_ct((nm * cdq).as_slice());
 
     // Elastic: Λ on Φ, K_Ψ(ϑ) = Σ wₐw_b K_ab on the shapes, and its ϑ-derivative.
-    let mut k_psi = DMatrix::<f64>::zeros(n_t, n_t);
-    let mut dk_psi = DMatrix::<f64>::zeros(n_t, n_t);
+    let (k_psi, dk_psi) = (&mut out.k_psi, &mut out.dk_psi);
+    k_psi.fill(0.0);
+    dk_psi.fill(0.0);
     for a in 0..4 {
         for b in 0..4 {
+            let (f, df) = (w[a] * w[b], dw[a] * w[b] + w[a] * dw[b]);
+            if f == 0.0 && df == 0.0 {
+                continue;
+            }
             // K_ab is stored for a ≤ b; K_ba = K_abᵀ.
             let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
             let kab = &gear.pair_invariants(st.a0 + lo, st.a0 + hi).k_ss;
-            let (f, df) = (w[a] * w[b], (dw[a] * w[b] + w[a] * dw[b]) / d);
             for r in 0..n_t {
                 for c in 0..n_t {
                     let v = if a <= b { kab[(r, c)] } else { kab[(c, r)] };
@@ -313,31 +375,40 @@ pub fn gear_terms(
             }
         }
     }
-    let psi = DVector::from_column_slice(eta_psi);
-    let psid = DVector::from_column_slice(etad_psi);
-    let k_eta = &k_psi * &psi;
-    let mut elastic = 0.5 * psi.dot(&k_eta);
-    force[0] -= 0.5 * psi.dot(&(&dk_psi * &psi));
-    let mut damping_force = DVector::<f64>::zeros(n_q);
+    let mut elastic = 0.0;
+    for r in 0..n_t {
+        let (mut k_eta, mut dk_eta) = (0.0, 0.0);
+        for c in 0..n_t {
+            k_eta += k_psi[(r, c)] * eta_psi[c];
+            dk_eta += dk_psi[(r, c)] * eta_psi[c];
+        }
+        elastic += 0.5 * eta_psi[r] * k_eta;
+        force[0] -= 0.5 * eta_psi[r] * dk_eta;
+        force[1 + n_k + r] -= k_eta;
+    }
+    out.damping_force.fill(0.0);
     for j in 0..n_k {
         let lam = gear.eigenvalues[j];
         elastic += 0.5 * lam * eta_phi[j] * eta_phi[j];
         let damp = 2.0 * damping.modes_ratio * lam.sqrt() * etad_phi[j];
         force[1 + j] -= lam * eta_phi[j] + damp;
-        damping_force[1 + j] = damp;
+        out.damping_force[1 + j] = damp;
     }
-    let damp_psi = if damping.shapes_ratio > 0.0 {
-        let eig = nalgebra::SymmetricEigen::new(k_psi.clone());
-        let root = &eig.eigenvectors
-            * DMatrix::from_diagonal(&eig.eigenvalues.map(|l| l.max(0.0).sqrt()))
-            * eig.eigenvectors.transpose();
-        (root * &psid) * (2.0 * damping.shapes_ratio)
-    } else {
-        DVector::zeros(n_t)
-    };
-    for m in 0..n_t {
-        force[1 + n_k + m] -= k_eta[m] + damp_psi[m];
-        damping_force[1 + n_k + m] = damp_psi[m];
+    out.elastic_j = elastic;
+    if damping.shapes_ratio > 0.0 {
+        // D_Ψ(ϑ) = 2ζ·((1 − p)·D_s + p·D_{s+1}): the linear weights, never negative.
+        let d_psi = &mut out.d_psi;
+        let p = st.fraction;
+        let (lo, hi) = (&gear.shape_damping_roots[st.a0 + 1], &gear.shape_damping_roots[st.a0 + 2]);
+        for r in 0..n_t {
+            for c in 0..n_t {
+                d_psi[(r, c)] = 2.0 * damping.shapes_ratio * ((1.0 - p) * lo[(r, c)] + p * hi[(r, c)]);
+            }
+        }
+        for r in 0..n_t {
+            let damp: f64 = (0..n_t).map(|c| d_psi[(r, c)] * etad_psi[c]).sum();
+            force[1 + n_k + r] -= damp;
+            out.damping_force[1 + n_k + r] = damp;
+        }
     }
-    GearTerms { mass, force, kinetic_j: kinetic, elastic_j: elastic, damping_force }
 }

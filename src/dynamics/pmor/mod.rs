@@ -25,7 +25,7 @@ pub mod model;
 
 use crate::contact::mesh_kinematics::PairPlacement;
 use contact::{contact_loads, ContactLoads, GearPose, Loading};
-use equations::{gear_terms, Damping, Stencil};
+use equations::{gear_terms, Damping, GearTerms, Stencil};
 use integrator::Integrator;
 use model::PmorModel;
 use nalgebra::{DMatrix, DVector};
@@ -83,6 +83,8 @@ pub struct PmorDynamics<'a> {
     pub integrator: Integrator,
     /// The Gram matrix N of the interval last used, per gear (it changes only at samples).
     gram_cache: [RefCell<Option<(usize, Rc<DMatrix<f64>>)>>; 2],
+    /// Each gear's terms, computed in place (no allocation per right-hand side).
+    terms: [RefCell<GearTerms>; 2],
 }
 
 impl PmorModel {
@@ -160,6 +162,7 @@ impl<'a> PmorDynamics<'a> {
             loading: Loading::HertzBand,
             integrator: model.integrator,
             gram_cache: Default::default(),
+            terms: [0, 1].map(|i| RefCell::new(GearTerms::new(&model.gears[i]))),
         }
     }
 
@@ -231,10 +234,7 @@ impl<'a> PmorDynamics<'a> {
     /// ẏ at y (anchors fixed), and the outputs there.
     pub fn rhs(&self, y: &[f64], anchor: [i64; 2], torques: [f64; 2]) -> Result<(Vec<f64>, PmorOutputs), String> {
         let l = self.layout();
-        let mut stencils = Vec::with_capacity(2);
-        for i in 0..2 {
-            stencils.push(self.stencil(i, anchor[i], y[l.q(i)])?);
-        }
+        let stencils = [self.stencil(0, anchor[0], y[l.q(0)])?, self.stencil(1, anchor[1], y[l.q(1)])?];
         let poses = [0, 1].map(|i| GearPose {
             theta: y[l.q(i)],
             anchor: anchor[i],
@@ -254,7 +254,9 @@ impl<'a> PmorDynamics<'a> {
         for i in 0..2 {
             let n = l.n_q[i];
             dy[l.q(i)..l.q(i) + n].copy_from_slice(&y[l.v(i)..l.v(i) + n]);
-            let terms = gear_terms(
+            let mut terms = self.terms[i].borrow_mut();
+            let terms = &mut *terms;
+            gear_terms(
                 &self.model.gears[i],
                 &stencils[i],
                 &self.gram(i, stencils[i].a0),
@@ -262,19 +264,20 @@ impl<'a> PmorDynamics<'a> {
                 y[l.v(i)],
                 &y[l.v(i) + 1..l.v(i) + n],
                 self.damping[i],
+                terms,
             );
-            let mut rhs = terms.force + DVector::from_column_slice(&contact.force[i]);
-            rhs[0] += torques[i] + damper_torque[i];
-            let mut mass = terms.mass;
-            mass[(0, 0)] += self.added_inertia_kgm2[i];
-            out.kinetic_j += 0.5 * self.added_inertia_kgm2[i] * y[l.v(i)].powi(2);
-            let acc = solve_spd(mass, rhs)?;
-            dy[l.v(i)..l.v(i) + n].copy_from_slice(acc.as_slice());
-            out.kinetic_j += terms.kinetic_j;
+            out.kinetic_j += terms.kinetic_j + 0.5 * self.added_inertia_kgm2[i] * y[l.v(i)].powi(2);
             out.elastic_j += terms.elastic_j;
             dissipation += terms.damping_force.iter().zip(&y[l.v(i)..l.v(i) + n]).map(|(f, v)| f * v).sum::<f64>();
             out.damping_force[l.q(i)..l.q(i) + n].copy_from_slice(terms.damping_force.as_slice());
             out.damping_force[l.q(i)] -= damper_torque[i];
+            // M q̈ = force + contact + torque, solved in place (the force becomes q̈).
+            let rhs = terms.force.as_mut_slice();
+            rhs.iter_mut().zip(&contact.force[i]).for_each(|(f, c)| *f += c);
+            rhs[0] += torques[i] + damper_torque[i];
+            terms.mass[(0, 0)] += self.added_inertia_kgm2[i];
+            solve_spd_in_place(&mut terms.mass, rhs)?;
+            dy[l.v(i)..l.v(i) + n].copy_from_slice(rhs);
         }
         // The mesh force the FMU reports is the teeth's whole force, elastic and damping, as
         // the lumped model's.
@@ -394,8 +397,42 @@ fn substeps(duration: f64, max_step: f64) -> (usize, f64) {
     (n, duration / n as f64)
 }
 
-/// Solves M a = f for the symmetric positive definite mass matrix.
-fn solve_spd(m: DMatrix<f64>, f: DVector<f64>) -> Result<DVector<f64>, String> {
-    let chol = m.cholesky().ok_or("the reduced mass matrix is not positive definite")?;
-    Ok(chol.solve(&f))
+/// Solves M a = f for the symmetric positive definite mass matrix, in place: M is overwritten
+/// by its Cholesky factor (lower triangle) and f by a.
+fn solve_spd_in_place(m: &mut DMatrix<f64>, f: &mut [f64]) -> Result<(), String> {
+    let n = f.len();
+    for j in 0..n {
+        let mut d = m[(j, j)];
+        for k in 0..j {
+            d -= m[(j, k)] * m[(j, k)];
+        }
+        if !(d > 0.0) {
+            return Err("the reduced mass matrix is not positive definite".into());
+        }
+        let d = d.sqrt();
+        m[(j, j)] = d;
+        for i in j + 1..n {
+            let mut v = m[(i, j)];
+            for k in 0..j {
+                v -= m[(i, k)] * m[(j, k)];
+            }
+            m[(i, j)] = v / d;
+        }
+    }
+    // L z = f, then Lᵀ a = z.
+    for i in 0..n {
+        let mut v = f[i];
+        for k in 0..i {
+            v -= m[(i, k)] * f[k];
+        }
+        f[i] = v / m[(i, i)];
+    }
+    for i in (0..n).rev() {
+        let mut v = f[i];
+        for k in i + 1..n {
+            v -= m[(k, i)] * f[k];
+        }
+        f[i] = v / m[(i, i)];
+    }
+    Ok(())
 }

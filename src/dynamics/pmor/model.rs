@@ -83,30 +83,59 @@ pub struct PmorGear {
     pub sample: Vec<SampleInvariants>,
     /// Per stored sample a and offset d = b − a + 3 ∈ 0…6 (None where b is out of range).
     pub pair: Vec<Option<PairInvariants>>,
+    /// Per stored sample a, the shapes' damping at unit ratio with their true modal mass:
+    /// M_a·V·√Λ·Vᵀ·M_a from K_a v = λ M_a v, Vᵀ M_a V = I (`equations::modal_damping_root`).
+    /// The shape damping at ratio ζ is 2ζ times it, interpolated between the samples with the
+    /// linear (never negative) weights so that it stays positive semi-definite.
+    pub shape_damping_roots: Vec<DMatrix<f64>>,
     /// The loadable nodes of the drive and the coast flanks (`Flank::Drive as usize`, …) of the
     /// teeth that can mesh (reference pitch), with the rows of Φ and of the shapes there.
     pub flanks: [FlankRows; 2],
 }
 
 /// One flank's loadable nodes and the basis rows there: all the contact reads of the FE fields.
+/// The rows are stored node-major (one row of Φ or of a sample S_a is a contiguous slice): the
+/// contact reads a few nodes' rows at a time, and a column-major row stride of 3 × nodes would
+/// miss the cache on every coefficient.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FlankRows {
     pub grid: FlankGrid,
-    /// Rows of Φ at the nodes (3 per node: x, y, z), n_k columns.
-    pub phi: DMatrix<f64>,
-    /// Rows of each stored sample S_a at the nodes, n_t columns.
-    pub shapes: Vec<DMatrix<f64>>,
+    /// Φᵀ at the nodes: column r = 3·node + c (x, y, z) is that row of Φ (n_k entries).
+    phi_rows: DMatrix<f64>,
+    /// Per stored sample, S_aᵀ at the nodes (n_t × 3·nodes), laid out as `phi_rows`.
+    shape_rows: Vec<DMatrix<f64>>,
     /// The largest Frobenius norm of a node's 3 rows of Φ, and of a stored sample's: they bound
     /// every node's displacement by the size of η ([`PmorGear::flank_displacement_bound`]).
     pub largest_node_rows: [f64; 2],
 }
 
 impl FlankRows {
+    /// From the rows of Φ (3·nodes × n_k) and of each stored sample (3·nodes × n_t).
     pub fn new(grid: FlankGrid, phi: DMatrix<f64>, shapes: Vec<DMatrix<f64>>) -> Self {
         let node_norm = |m: &DMatrix<f64>, k: usize| m.rows(3 * k, 3).norm();
         let largest = |m: &DMatrix<f64>| (0..grid.len()).map(|k| node_norm(m, k)).fold(0.0, f64::max);
         let largest_node_rows = [largest(&phi), shapes.iter().map(largest).fold(0.0, f64::max)];
-        FlankRows { grid, phi, shapes, largest_node_rows }
+        FlankRows {
+            grid,
+            phi_rows: phi.transpose(),
+            shape_rows: shapes.iter().map(|s| s.transpose()).collect(),
+            largest_node_rows,
+        }
+    }
+
+    /// Row r = 3·node + c of Φ (n_k entries).
+    #[inline]
+    pub fn phi_row(&self, r: usize) -> &[f64] {
+        let n = self.phi_rows.nrows();
+        &self.phi_rows.as_slice()[r * n..(r + 1) * n]
+    }
+
+    /// Row r of stored sample a (n_t entries).
+    #[inline]
+    pub fn shape_row(&self, a: usize, r: usize) -> &[f64] {
+        let m = &self.shape_rows[a];
+        let n = m.nrows();
+        &m.as_slice()[r * n..(r + 1) * n]
     }
 }
 
