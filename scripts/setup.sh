@@ -21,7 +21,7 @@ fi
 
 # An existing venv missing any of these (made before the sweeps) is completed, not recreated.
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c \
-    'import fmpy, numpy, scipy, matplotlib, pytest, dask.distributed, xarray, zarr, tqdm, gearfmu.sweep' >/dev/null 2>&1; then
+    'import fmpy, numpy, scipy, matplotlib, pytest, dask.distributed, xarray, zarr, tqdm, libcosimpy, gearfmu.sweep' >/dev/null 2>&1; then
   echo "setup: creating/completing .venv (requirements.txt, python/ as the gearfmu package)"
   [ -x .venv/bin/python ] || python3 -m venv .venv
   .venv/bin/pip install -q --disable-pip-version-check -r requirements.txt
