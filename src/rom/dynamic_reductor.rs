@@ -421,16 +421,13 @@ pub fn build_dynamic_model(
             })
             .collect();
 
-        // Fields and their Gram products with the unclamped mass: [Gx | GΦ | Φ | GS_a | S_a].
+        // Fields and their Gram products with the unclamped mass: [Gx | Φ | S_a] (the kinetic
+        // energy's fields, `dynamics::pmor::equations`).
         let x: Vec<f64> = gm.mesh.nodes.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let n_k = g.phi.len();
         let n_a = stored.len();
         let mut fields: Vec<Vec<f64>> = vec![generator(&x)];
-        fields.extend(g.phi.iter().map(|p| generator(p)));
         fields.extend(g.phi.iter().cloned());
-        for sample in &stored {
-            fields.extend(sample.iter().map(|f| generator(f)));
-        }
         for sample in &stored {
             fields.extend(sample.iter().cloned());
         }
@@ -445,10 +442,8 @@ pub fn build_dynamic_model(
             faer::get_global_parallelism(),
         );
         let gram = f.transpose() * &mf;
-        let gs = |a: usize, t: usize| 1 + 2 * n_k + a * n_t + t;
-        let sc = |a: usize, t: usize| 1 + 2 * n_k + n_a * n_t + a * n_t + t;
-        let gphi = |j: usize| 1 + j;
-        let phic = |j: usize| 1 + n_k + j;
+        let sc = |a: usize, t: usize| 1 + n_k + a * n_t + t;
+        let phic = |j: usize| 1 + j;
         // Stiffness products of the shapes (free DOFs; the bore does not move).
         let dofs = &g.model.dofs;
         let free = |v: &[f64]| -> Vec<f64> {
@@ -465,11 +460,7 @@ pub fn build_dynamic_model(
 
         let sample: Vec<SampleInvariants> = (0..n_a)
             .map(|a| SampleInvariants {
-                gx_gs: DVector::from_fn(n_t, |t, _| gram[(0, gs(a, t))]),
                 gx_s: DVector::from_fn(n_t, |t, _| gram[(0, sc(a, t))]),
-                gphi_gs: DMatrix::from_fn(n_k, n_t, |j, t| gram[(gphi(j), gs(a, t))]),
-                gphi_s: DMatrix::from_fn(n_k, n_t, |j, t| gram[(gphi(j), sc(a, t))]),
-                phi_gs: DMatrix::from_fn(n_k, n_t, |j, t| gram[(phic(j), gs(a, t))]),
                 phi_s: DMatrix::from_fn(n_k, n_t, |j, t| gram[(phic(j), sc(a, t))]),
             })
             .collect();
@@ -484,9 +475,6 @@ pub fn build_dynamic_model(
                 }
                 let b = b as usize;
                 pairs.push(Some(PairInvariants {
-                    gs_gs: DMatrix::from_fn(n_t, n_t, |r, c| gram[(gs(a, r), gs(b, c))]),
-                    gs_s: DMatrix::from_fn(n_t, n_t, |r, c| gram[(gs(a, r), sc(b, c))]),
-                    s_gs: DMatrix::from_fn(n_t, n_t, |r, c| gram[(sc(a, r), gs(b, c))]),
                     s_s: DMatrix::from_fn(n_t, n_t, |r, c| gram[(sc(a, r), sc(b, c))]),
                     k_ss: DMatrix::from_fn(n_t, n_t, |r, c| {
                         0.5 * (dot(&shape_free[a * n_t + r], &k_shapes[b * n_t + c])
@@ -530,10 +518,7 @@ pub fn build_dynamic_model(
             pitch_map,
             invariance_residual: invariance[i],
             polar_inertia_kgm2: gram[(0, 0)],
-            gx_gphi: DVector::from_fn(n_k, |j, _| gram[(0, gphi(j))]),
             gx_phi: DVector::from_fn(n_k, |j, _| gram[(0, phic(j))]),
-            gphi_gphi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(gphi(r), gphi(c))]),
-            gphi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(gphi(r), phic(c))]),
             phi_phi: DMatrix::from_fn(n_k, n_k, |r, c| gram[(phic(r), phic(c))]),
             sample,
             shape_damping_roots: (0..pairs.len() / 7)

@@ -34,23 +34,15 @@ pub enum Interpolation {
 /// Products of one sample S_a with the rigid-body and eigenmode fields.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SampleInvariants {
-    /// (Gx)ᵀM(GS_a), (Gx)ᵀM S_a (n_t each).
-    pub gx_gs: DVector<f64>,
+    /// (Gx)ᵀM S_a (n_t).
     pub gx_s: DVector<f64>,
-    /// (GΦ)ᵀM(GS_a), (GΦ)ᵀM S_a, Φᵀ M (GS_a), Φᵀ M S_a (n_k × n_t; the last is ≈ 0 by
-    /// residualization, kept so that nothing is assumed).
-    pub gphi_gs: DMatrix<f64>,
-    pub gphi_s: DMatrix<f64>,
-    pub phi_gs: DMatrix<f64>,
+    /// Φᵀ M S_a (n_k × n_t; ≈ 0 by residualization, kept so that nothing is assumed).
     pub phi_s: DMatrix<f64>,
 }
 
-/// Products of two samples S_a, S_b (|a − b| ≤ 3), n_t × n_t each.
+/// Products of two samples S_a, S_b (|a − b| ≤ 3), n_t × n_t each: S_aᵀMS_b and S_aᵀKS_b.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PairInvariants {
-    pub gs_gs: DMatrix<f64>,
-    pub gs_s: DMatrix<f64>,
-    pub s_gs: DMatrix<f64>,
     pub s_s: DMatrix<f64>,
     pub k_ss: DMatrix<f64>,
 }
@@ -74,10 +66,8 @@ pub struct PmorGear {
     pub invariance_residual: f64,
     /// (Gx)ᵀM(Gx) (kg·m²): the undeformed polar moment of inertia.
     pub polar_inertia_kgm2: f64,
-    pub gx_gphi: DVector<f64>,
+    /// (Gx)ᵀMΦ and ΦᵀMΦ.
     pub gx_phi: DVector<f64>,
-    pub gphi_gphi: DMatrix<f64>,
-    pub gphi_phi: DMatrix<f64>,
     pub phi_phi: DMatrix<f64>,
     /// Per stored sample (index a = s + 2, s = −2 … n_θ + 2).
     pub sample: Vec<SampleInvariants>,
