@@ -747,39 +747,44 @@ fn contact_beyond_the_half_width_rule_is_an_error() {
     }
 }
 
-/// The mesh damper (`PmorDynamics::mesh_damping_n_s_per_m`, the FMU's mesh_damping_ratio) damps
-/// the mesh mode at about the ratio asked (evidence: the eigenvalues of the linearized flow, the
-/// damped pair against the same pair without the damper). The modal damping alone acts on each
-/// coordinate at its own frequency, far above the mesh mode's, and leaves that mode at a fraction
-/// of a percent; a damper c = 2ζ√(k̄·m_e) along the line of action adds ζ·(ω̄/ω)·(the share of
-/// the mode's motion that is rigid relative rotation), ω̄ = √(k̄/m_e): close to ζ, not equal.
+/// The mesh damper (`PmorDynamics::mesh_damping_n_s_per_m`, the FMU's mesh_damping_ratio)
+/// gives the mesh mode the damping ratio asked (evidence: the linearized pair's eigenvalues,
+/// `linear::mesh_mode`), within 20 % from ζ = 0.02 to 0.3, at 185 N·m (the build calibrates at
+/// the ROM torque, 250 N·m) and at two mesh positions (the build calibrates at 0.3 of a pitch).
+/// The damper acts on the loaded sections' approach velocity, so without the build's gain
+/// (`PmorModel::mesh_damper_gain`) it would give 41 % of the ratio: the teeth's own bending,
+/// which it leaves out, carries the rest of the mesh mode's relative motion.
 #[test]
 fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
     let f = fixture();
     let m = &f.model;
     let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
     let torque = 185.0;
-    let theta2 = 0.3 * m.gears[1].pitch_rad();
     let dynamics = |zeta: f64| {
         let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
         d.mesh_damping_n_s_per_m = m.mesh_damper_n_s_per_m(zeta, inertia);
         d
     };
-    let mesh_mode = |d: &PmorDynamics| linear::mesh_mode(d, theta2, torque).unwrap();
-    let zeta = 0.1;
-    let (without, with) = (mesh_mode(&dynamics(0.0)), mesh_mode(&dynamics(zeta)));
-    let reference_hz = (m.mesh_stiffness_n_per_m / m.mesh_mass_kg(inertia)).sqrt() / (2.0 * PI);
-    eprintln!(
-        "mesh mode {:.0} Hz ({:.0} % of a load step's DTE; 2-DOF √(k̄/m_e)/2π {reference_hz:.0} Hz): ζ {:.4} without the damper, {:.4} with ζ = {zeta}",
-        without.frequency_hz,
-        100.0 * without.dte_share,
-        without.damping_ratio,
-        with.damping_ratio
-    );
-    assert!(without.dte_share > 0.5, "one mode carries the DTE");
-    assert!(without.damping_ratio < 0.01, "without the damper the mesh mode is lightly damped");
-    let added = with.damping_ratio - without.damping_ratio;
-    assert!((0.5 * zeta..1.2 * zeta).contains(&added), "the damper adds ζ {added:.4} to the mesh mode, asked {zeta}");
+    eprintln!("the build's damper gain g = {:.3}", m.mesh_damper_gain);
+    for position in [0.3, 0.7] {
+        let theta2 = position * m.gears[1].pitch_rad();
+        let mesh_mode = |d: &PmorDynamics| linear::mesh_mode(d, theta2, torque).unwrap();
+        let without = mesh_mode(&dynamics(0.0));
+        let reference_hz = (m.mesh_stiffness_n_per_m / m.mesh_mass_kg(inertia)).sqrt() / (2.0 * PI);
+        eprintln!(
+            "gear 2 at {position} pitch: mesh mode {:.0} Hz ({:.0} % of a load step's DTE; 2-DOF √(k̄/m_e)/2π {reference_hz:.0} Hz): ζ {:.4} without the damper",
+            without.frequency_hz,
+            100.0 * without.dte_share,
+            without.damping_ratio,
+        );
+        assert!(without.dte_share > 0.5, "one mode carries the DTE");
+        assert!(without.damping_ratio < 0.01, "without the damper the mesh mode is lightly damped");
+        for zeta in [0.02, 0.05, 0.1, 0.3] {
+            let added = mesh_mode(&dynamics(zeta)).damping_ratio - without.damping_ratio;
+            eprintln!("  asked ζ = {zeta}: the damper adds {added:.4} ({:+.1} %)", 100.0 * (added / zeta - 1.0));
+            assert!((added / zeta - 1.0).abs() < 0.2, "the damper adds ζ {added:.4} to the mesh mode, asked {zeta}");
+        }
+    }
 }
 
 /// Velocity Verlet books the mesh damper's work like the modal damping's (evidence: the
@@ -867,4 +872,58 @@ fn the_port_accelerates_as_the_rigid_gear_and_its_angle_integrates_its_speed() {
     assert!(bore_error > 0.01, "the bore rings with the hub mode (else this test proves nothing)");
     assert!((angle / (torque * t * t / (2.0 * j1)) - 1.0).abs() < 0.01);
     assert!(rate_error < 1e-3 * torque * t / j1, "the port's angle must integrate its speed");
+}
+
+/// The mesh damper never pulls the teeth together and only dissipates (evidence: the sign of
+/// the contact force and of the damper's power at every step). The rattle of
+/// `rattle_across_the_backlash_conserves_energy` with the mesh damper at ζ = 0.3: the teeth
+/// strike both flanks and separate again at 0.05 m/s, so the approach velocity is negative
+/// on every separation, where a damper on the rigid frames' velocity (this model's before
+/// issue 24) pulled with c·α̇ while the elastic force vanished. Each section's damper force is
+/// bounded below by its elastic force, so the mesh force keeps the sign of the flank that
+/// carries it, and the booked dissipation never decreases.
+#[test]
+fn the_mesh_damper_never_pulls_and_only_dissipates() {
+    let f = fixture();
+    let m = &f.model;
+    let rb = base_radii(m);
+    let (j1, j2) = (m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2);
+    let mut dynamics =
+        PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
+    dynamics.mesh_damping_n_s_per_m = m.mesh_damper_n_s_per_m(0.3, [j1, j2]);
+    dynamics.integrator = Integrator::Verlet;
+    let h = linear::default_step(&dynamics).unwrap().max_step_s;
+    let m_eq = 1.0 / (rb[0] * rb[0] / j1 + rb[1] * rb[1] / j2);
+    let (w2, v) = (50.0, -0.05);
+    let dw = [v * m_eq * rb[0] / j1, -v * m_eq * rb[1] / j2];
+    let mut s = m.initial_state([0.0, 0.0], [w2 * rb[1] / rb[0] + dw[0], w2 + dw[1]]);
+    let (mut separations, mut flanks, mut previous_dissipated) = (0, [0usize; 2], 0.0);
+    let mut previous_force = 0.0;
+    for _ in 0..(0.02 / h) as usize {
+        dynamics.verlet_advance(&mut s, [0.0, 0.0], h, h * (1.0 + 1e-9)).unwrap();
+        let c = dynamics.outputs(&s).unwrap().contact;
+        let elastic = c.normal_force_n - c.damper_force_n;
+        assert!(c.damper_power_w >= 0.0, "the damper's power {} W is negative", c.damper_power_w);
+        assert!(
+            c.normal_force_n * elastic >= 0.0,
+            "mesh force {} N against elastic {elastic} N: the damper pulls",
+            c.normal_force_n
+        );
+        assert!(s.dissipated_j >= previous_dissipated - 1e-12, "the booked dissipation decreased");
+        previous_dissipated = s.dissipated_j;
+        if previous_force != 0.0 && c.normal_force_n == 0.0 {
+            separations += 1;
+        }
+        if c.normal_force_n > 0.0 {
+            flanks[0] += 1;
+        } else if c.normal_force_n < 0.0 {
+            flanks[1] += 1;
+        }
+        previous_force = c.normal_force_n;
+    }
+    eprintln!(
+        "damped rattle: {separations} separations, steps on drive / coast flanks {flanks:?}, dissipated {:.3e} J",
+        s.dissipated_j
+    );
+    assert!(separations >= 2 && flanks[0] > 0 && flanks[1] > 0, "the teeth must strike both flanks and separate");
 }

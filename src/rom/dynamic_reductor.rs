@@ -126,6 +126,21 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
     linear::default_step(&dynamics)
 }
 
+/// The mesh damper's calibration (`linear::mesh_damper_gain`) with the build's modal damping.
+fn mesh_damper_gain(model: &PmorModel, options: &DynamicBuildOptions) -> Result<f64, String> {
+    use crate::contact::mesh_kinematics::PairPlacement;
+    use crate::dynamics::pmor::{linear, PmorDynamics};
+    let place = PairPlacement::new(&model.pair);
+    let dynamics = PmorDynamics::new(
+        model,
+        &place,
+        model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
+        [0.0; 2],
+    );
+    let torque = options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    linear::mesh_damper_gain(&dynamics, torque)
+}
+
 /// The reduced pair's mean tangent mesh stiffness at the reference mesh force, with the build's
 /// damping (a static property: damping does not enter it).
 fn mean_mesh_stiffness(model: &PmorModel, options: &DynamicBuildOptions) -> Result<f64, String> {
@@ -539,6 +554,7 @@ pub fn build_dynamic_model(
         modal_damping_ratio: options.modal_damping_ratio,
         shape_damping_ratio: options.shape_damping_ratio,
         mesh_stiffness_n_per_m: 0.0,
+        mesh_damper_gain: 1.0,
         integrator: options.integrator,
         max_step_s: 0.0,
         stability_limit_s: 0.0,
@@ -554,6 +570,8 @@ pub fn build_dynamic_model(
     };
     progress("the mean mesh stiffness (static equilibria over a pitch)".into());
     model.mesh_stiffness_n_per_m = mean_mesh_stiffness(&model, options)?;
+    progress("calibrating the mesh damper on the linearized mesh mode".into());
+    model.mesh_damper_gain = mesh_damper_gain(&model, options)?;
     progress("linearizing the pair for the integrator step".into());
     let step = integrator_step(&model, options)?;
     model.max_step_s = step.max_step_s;

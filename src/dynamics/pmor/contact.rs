@@ -39,6 +39,8 @@ pub struct GearPose<'a> {
     pub anchor: i64,
     pub stencil: Stencil,
     pub eta: &'a [f64],
+    /// (θ̇, η̇): what the mesh damper reads (empty where no damper acts).
+    pub velocity: &'a [f64],
 }
 
 /// What the contact puts on the pair.
@@ -56,6 +58,21 @@ pub struct ContactLoads {
     /// Force per tooth pair (N, negative on the coast flanks), with its pair index j in the pose
     /// where its flanks drive (`PairPlacement::flank_contact`).
     pub pair_forces: Vec<(i64, f64)>,
+    /// The mesh damper's part of `force` with the sign of Dq̇, per gear over (θ, η), its force
+    /// (N, signed as `normal_force_n`) and its power Σ F_d·α̇ ≥ 0 (W).
+    pub damping_force: [Vec<f64>; 2],
+    pub damper_force_n: f64,
+    pub damper_power_w: f64,
+}
+
+/// What the mesh damper needs of one loaded section: its elastic force and Hertz tangent
+/// stiffness, and the row of its approach in the slow coordinates of each gear (θ and η_Φ).
+struct DampedSection {
+    flank_sign: f64,
+    force_n: f64,
+    stiffness_n_per_m: f64,
+    /// Per gear: ∂α/∂θ, then the band's rows of Φ along the flank normal (n_k).
+    rows: [Vec<f64>; 2],
 }
 
 /// Gear i's elastic approach at a contact point: nᵀũ, with n the flank normal and ũ the
@@ -216,16 +233,30 @@ pub enum Loading {
 
 /// Contact loads of the pair on both flanks; `restage` maps a gear's angle to its stencil (for
 /// the differences).
+/// The mesh damper: a viscous coefficient c (N·s/m) shared by the loaded sections in proportion
+/// to their Hertz tangent stiffness, each acting on its approach velocity α̇ = J·q̇ from the
+/// gears' rotation and body modes (θ̇, η̇_Φ) and never pulling: F_d = max(c_s·α̇, −F_s), so the
+/// section's force stays ≥ 0 and the damper's power F_d·α̇ ≥ 0. The contact shapes' velocities
+/// η̇_Ψ are left out on purpose: they are the stiff coordinates (the shapes against the Hertz
+/// contact near 100 kHz), and a damper on them makes those modes overdamped with a real
+/// eigenvalue near −c/m_shape ≈ −2·10⁶ s⁻¹ — an explicit step of 0.5 µs.
 pub fn contact_loads(
     model: &PmorModel,
     place: &PairPlacement,
     poses: [&GearPose; 2],
     restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
     loading: Loading,
+    damper_n_s_per_m: f64,
 ) -> Result<ContactLoads, String> {
     let p = &model.pair;
     let n_e = [poses[0].eta.len(), poses[1].eta.len()];
-    let mut out = ContactLoads { force: [vec![0.0; 1 + n_e[0]], vec![0.0; 1 + n_e[1]]], ..Default::default() };
+    let mut out = ContactLoads {
+        force: [vec![0.0; 1 + n_e[0]], vec![0.0; 1 + n_e[1]]],
+        damping_force: [vec![0.0; 1 + n_e[0]], vec![0.0; 1 + n_e[1]]],
+        ..Default::default()
+    };
+    let damped = damper_n_s_per_m > 0.0;
+    let mut damped_sections: Vec<DampedSection> = Vec::new();
     let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
     let sections = layers.len() - 1;
     let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
@@ -265,6 +296,12 @@ pub fn contact_loads(
                     .map_err(|m| format!("tooth pair {j}, section {}, {flank:?} flanks: {m}", at.section))?;
                 // Generalized forces on η: the Hertz band, pushing into each tooth.
                 let beta = law.half_width(force);
+                let mut section = damped.then(|| DampedSection {
+                    flank_sign: flank.sign(),
+                    force_n: force,
+                    stiffness_n_per_m: 1.0 / law.compliance(force),
+                    rows: [0, 1].map(|i| vec![0.0; 1 + model.gears[i].modes()]),
+                });
                 for i in 0..2 {
                     let g = &model.gears[i];
                     let grid = &g.flank(flank).grid;
@@ -280,6 +317,11 @@ pub fn contact_loads(
                         g.basis_row(flank, &poses[i].stencil, k, normal.unwrap_or(grid.nodes[k].1), &mut tmp[i]);
                         for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
                             *f -= force * w * t;
+                        }
+                        if let Some(section) = section.as_mut() {
+                            for (r, t) in section.rows[i][1..].iter_mut().zip(&tmp[i]) {
+                                *r += w * t;
+                            }
                         }
                     }
                 }
@@ -300,6 +342,7 @@ pub fn contact_loads(
                                     anchor: poses[i].anchor,
                                     stencil: restage(i, theta)?,
                                     eta: poses[i].eta,
+                                    velocity: poses[i].velocity,
                                 };
                                 let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
                                 penetration_at(model, place, flank, both, j, s, z_mid)
@@ -315,6 +358,12 @@ pub fn contact_loads(
                 for i in 0..2 {
                     out.force[i][0] -= force * alpha_slope[i] + dw_dr * radius_slope[i];
                 }
+                if let Some(mut section) = section {
+                    for i in 0..2 {
+                        section.rows[i][0] = alpha_slope[i];
+                    }
+                    damped_sections.push(section);
+                }
                 out.normal_force_n += flank.sign() * force;
                 out.potential_j += force * alpha - law.complementary_energy(force);
                 out.tangent_stiffness_n_per_m += 1.0 / law.compliance(force);
@@ -326,5 +375,21 @@ pub fn contact_loads(
             }
         }
     }
+    let total_stiffness: f64 = damped_sections.iter().map(|s| s.stiffness_n_per_m).sum();
+    for section in &damped_sections {
+        let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
+        let approach_rate: f64 =
+            (0..2).map(|i| section.rows[i].iter().zip(poses[i].velocity).map(|(r, v)| r * v).sum::<f64>()).sum();
+        let damper = (c * approach_rate).max(-section.force_n);
+        for i in 0..2 {
+            for (k, r) in section.rows[i].iter().enumerate() {
+                out.force[i][k] -= damper * r;
+                out.damping_force[i][k] += damper * r;
+            }
+        }
+        out.damper_force_n += section.flank_sign * damper;
+        out.damper_power_w += damper * approach_rate;
+    }
+    out.normal_force_n += out.damper_force_n;
     Ok(out)
 }

@@ -201,6 +201,31 @@ pub fn mean_mesh_stiffness(dynamics: &PmorDynamics, force_n: f64) -> Result<f64,
     Ok(sum / STIFFNESS_POSITIONS as f64)
 }
 
+/// The damping ratio the calibration asks of the mesh mode (`mesh_damper_gain`).
+const GAIN_REFERENCE_RATIO: f64 = 0.05;
+
+/// The calibration g of the mesh damper (`PmorModel::mesh_damper_gain`): with the damper at
+/// g = 1 sized for ζ = 0.05 (c = 2ζ√(k̄·m_e)), the ratio it adds to the mesh mode, Δζ, at T₁ and
+/// gear 2 at 0.3 of a pitch; g = ζ/Δζ. The ratio added is linear in c over the range a user
+/// sets (measured on the default spur pair: Δζ/ζ = 0.406 from ζ = 0.02 to 0.75), so one point
+/// calibrates all; `pmor_dynamics` checks the result at other ratios.
+pub fn mesh_damper_gain(dynamics: &PmorDynamics, torque1_nm: f64) -> Result<f64, String> {
+    let model = dynamics.model;
+    let theta2 = 0.3 * model.gears[1].pitch_rad();
+    let inertia = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+    let with = |c: f64| -> Result<f64, String> {
+        let mut d = PmorDynamics::new(model, dynamics.place, dynamics.damping, dynamics.added_inertia_kgm2);
+        d.mesh_damping_n_s_per_m = c;
+        Ok(mesh_mode(&d, theta2, torque1_nm)?.damping_ratio)
+    };
+    let c = 2.0 * GAIN_REFERENCE_RATIO * (model.mesh_stiffness_n_per_m * model.mesh_mass_kg(inertia)).sqrt();
+    let added = with(c)? - with(0.0)?;
+    if !(added > 0.0) {
+        return Err(format!("the mesh damper adds no damping to the mesh mode (Δζ = {added})"));
+    }
+    Ok(GAIN_REFERENCE_RATIO / added)
+}
+
 /// The mesh mode of the reduced pair at one mesh position.
 #[derive(Debug, Clone, Copy)]
 pub struct MeshMode {

@@ -71,8 +71,8 @@ pub struct PmorDynamics<'a> {
     pub damping: [Damping; 2],
     /// Rigid inertia added at each bore (hub, shaft share), kg·m².
     pub added_inertia_kgm2: [f64; 2],
-    /// The mesh damper (N·s/m): viscous along the line of action while teeth touch, on the
-    /// rigid frames' relative velocity r_b1ω₁ − r_b2ω₂ — the lumped model's c·δ̇. The modal
+    /// The mesh damper (N·s/m): viscous on the loaded sections' approach velocity, shared by
+    /// their Hertz tangent stiffness and never pulling (`contact::contact_loads`). The modal
     /// damping acts on each coordinate at its own frequency, far above the mesh mode's, and
     /// leaves that mode almost undamped (`fmu-build linearize`); this is what damps it.
     /// Zero by default: the paper's model has modal damping only.
@@ -100,10 +100,10 @@ impl PmorModel {
         1.0 / (rb[0].powi(2) / inertia_kgm2[0] + rb[1].powi(2) / inertia_kgm2[1])
     }
 
-    /// The mesh damper's coefficient for a damping ratio ζ of the mesh mode, defined as the lumped
-    /// model's: c = 2ζ√(k̄·m_e) (N·s/m).
+    /// The mesh damper's coefficient for a damping ratio ζ of the mesh mode: the lumped model's
+    /// c = 2ζ√(k̄·m_e) times the build's calibration g (N·s/m; `PmorModel::mesh_damper_gain`).
     pub fn mesh_damper_n_s_per_m(&self, zeta: f64, inertia_kgm2: [f64; 2]) -> f64 {
-        2.0 * zeta * (self.mesh_stiffness_n_per_m * self.mesh_mass_kg(inertia_kgm2)).sqrt()
+        self.mesh_damper_gain * 2.0 * zeta * (self.mesh_stiffness_n_per_m * self.mesh_mass_kg(inertia_kgm2)).sqrt()
     }
 
     /// The state at rest-in-frame (η = 0) at given angles and speeds.
@@ -235,22 +235,26 @@ impl<'a> PmorDynamics<'a> {
     pub fn rhs(&self, y: &[f64], anchor: [i64; 2], torques: [f64; 2]) -> Result<(Vec<f64>, PmorOutputs), String> {
         let l = self.layout();
         let stencils = [self.stencil(0, anchor[0], y[l.q(0)])?, self.stencil(1, anchor[1], y[l.q(1)])?];
+        let damped = self.mesh_damping_n_s_per_m > 0.0;
         let poses = [0, 1].map(|i| GearPose {
             theta: y[l.q(i)],
             anchor: anchor[i],
             stencil: stencils[i],
             eta: &y[l.q(i) + 1..l.q(i) + l.n_q[i]],
+            velocity: if damped { &y[l.v(i)..l.v(i) + l.n_q[i]] } else { &[] },
         });
         let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
-        let mut contact = contact_loads(self.model, self.place, [&poses[0], &poses[1]], &restage, self.loading)?;
-        // The mesh damper's force along the line of action, and its torques on the two gears.
-        let rb = [self.model.gears[0].base_radius_m, self.model.gears[1].base_radius_m];
-        let loa_velocity = rb[0] * y[l.v(0)] - rb[1] * y[l.v(1)];
-        let damper_n = if contact.pairs_in_contact > 0 { self.mesh_damping_n_s_per_m * loa_velocity } else { 0.0 };
-        let damper_torque = [-rb[0] * damper_n, rb[1] * damper_n];
+        let contact = contact_loads(
+            self.model,
+            self.place,
+            [&poses[0], &poses[1]],
+            &restage,
+            self.loading,
+            self.mesh_damping_n_s_per_m,
+        )?;
         let mut dy = vec![0.0; y.len()];
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
-        let mut dissipation = damper_n * loa_velocity;
+        let mut dissipation = contact.damper_power_w;
         for i in 0..2 {
             let n = l.n_q[i];
             dy[l.q(i)..l.q(i) + n].copy_from_slice(&y[l.v(i)..l.v(i) + n]);
@@ -269,19 +273,18 @@ impl<'a> PmorDynamics<'a> {
             out.kinetic_j += terms.kinetic_j + 0.5 * self.added_inertia_kgm2[i] * y[l.v(i)].powi(2);
             out.elastic_j += terms.elastic_j;
             dissipation += terms.damping_force.iter().zip(&y[l.v(i)..l.v(i) + n]).map(|(f, v)| f * v).sum::<f64>();
-            out.damping_force[l.q(i)..l.q(i) + n].copy_from_slice(terms.damping_force.as_slice());
-            out.damping_force[l.q(i)] -= damper_torque[i];
+            let damping_force = &mut out.damping_force[l.q(i)..l.q(i) + n];
+            for ((d, t), c) in damping_force.iter_mut().zip(terms.damping_force.iter()).zip(&contact.damping_force[i]) {
+                *d = t + c;
+            }
             // M q̈ = force + contact + torque, solved in place (the force becomes q̈).
             let rhs = terms.force.as_mut_slice();
             rhs.iter_mut().zip(&contact.force[i]).for_each(|(f, c)| *f += c);
-            rhs[0] += torques[i] + damper_torque[i];
+            rhs[0] += torques[i];
             terms.mass[(0, 0)] += self.added_inertia_kgm2[i];
             solve_spd_in_place(&mut terms.mass, rhs)?;
             dy[l.v(i)..l.v(i) + n].copy_from_slice(rhs);
         }
-        // The mesh force the FMU reports is the teeth's whole force, elastic and damping, as
-        // the lumped model's.
-        contact.normal_force_n += damper_n;
         let n = y.len();
         dy[n - 2] = torques[0] * y[l.v(0)] + torques[1] * y[l.v(1)];
         dy[n - 1] = dissipation;
