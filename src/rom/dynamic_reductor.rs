@@ -126,8 +126,9 @@ fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<I
     linear::default_step(&dynamics)
 }
 
-/// The mesh damper's calibration (`linear::mesh_damper_gain`) with the build's modal damping.
-fn mesh_damper_gain(model: &PmorModel, options: &DynamicBuildOptions) -> Result<f64, String> {
+/// The mesh damper's calibration (`linear::mesh_damper_gain`) with the build's modal damping:
+/// (gain, the load on gear 1 it was found at).
+fn mesh_damper_gain(model: &PmorModel, options: &DynamicBuildOptions) -> Result<(f64, f64), String> {
     use crate::contact::mesh_kinematics::PairPlacement;
     use crate::dynamics::pmor::{linear, PmorDynamics};
     let place = PairPlacement::new(&model.pair);
@@ -137,8 +138,7 @@ fn mesh_damper_gain(model: &PmorModel, options: &DynamicBuildOptions) -> Result<
         model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
         [0.0; 2],
     );
-    let torque = options.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    linear::mesh_damper_gain(&dynamics, torque)
+    linear::mesh_damper_gain(&dynamics)
 }
 
 /// The reduced pair's mean tangent mesh stiffness at the reference mesh force, with the build's
@@ -571,7 +571,9 @@ pub fn build_dynamic_model(
     progress("the mean mesh stiffness (static equilibria over a pitch)".into());
     model.mesh_stiffness_n_per_m = mean_mesh_stiffness(&model, options)?;
     progress("calibrating the mesh damper on the linearized mesh mode".into());
-    model.mesh_damper_gain = mesh_damper_gain(&model, options)?;
+    let (gain, gain_torque_nm) = mesh_damper_gain(&model, options)?;
+    model.mesh_damper_gain = gain;
+    progress(format!("mesh damper gain {gain:.3} (calibrated at T₁ = {gain_torque_nm:.4} N·m)"));
     progress("linearizing the pair for the integrator step".into());
     let step = integrator_step(&model, options)?;
     model.max_step_s = step.max_step_s;

@@ -205,25 +205,40 @@ pub fn mean_mesh_stiffness(dynamics: &PmorDynamics, force_n: f64) -> Result<f64,
 const GAIN_REFERENCE_RATIO: f64 = 0.05;
 
 /// The calibration g of the mesh damper (`PmorModel::mesh_damper_gain`): with the damper at
-/// g = 1 sized for ζ = 0.05 (c = 2ζ√(k̄·m_e)), the ratio it adds to the mesh mode, Δζ, at T₁ and
-/// gear 2 at 0.3 of a pitch; g = ζ/Δζ. The ratio added is linear in c over the range a user
-/// sets (measured on the default spur pair: Δζ/ζ = 0.406 from ζ = 0.02 to 0.75), so one point
-/// calibrates all; `pmor_dynamics` checks the result at other ratios.
-pub fn mesh_damper_gain(dynamics: &PmorDynamics, torque1_nm: f64) -> Result<f64, String> {
+/// g = 1 sized for ζ = 0.05 (c = 2ζ√(k̄·m_e)), the ratio it adds to the mesh mode, Δζ, at the
+/// first of the mesh positions of [`mean_mesh_stiffness`] where the mesh mode can be found under
+/// the reference mesh force k̄ is measured at ([`reference_mesh_force_n`]), or else under half
+/// or a quarter of it (on the small helical example a tip-edge section leaves the Hertz law's
+/// range b < h/4 in the linearization at every position under the reference force); g = ζ/Δζ,
+/// with the load it was found at. The ratio added is linear in c over the range a user sets
+/// (measured on the default spur pair: Δζ/ζ = 0.406 from ζ = 0.02 to 0.75), so one point
+/// calibrates all; `pmor_dynamics` checks the result at other ratios, loads and positions.
+pub fn mesh_damper_gain(dynamics: &PmorDynamics) -> Result<(f64, f64), String> {
     let model = dynamics.model;
-    let theta2 = 0.3 * model.gears[1].pitch_rad();
     let inertia = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
-    let with = |c: f64| -> Result<f64, String> {
-        let mut d = PmorDynamics::new(model, dynamics.place, dynamics.damping, dynamics.added_inertia_kgm2);
-        d.mesh_damping_n_s_per_m = c;
-        Ok(mesh_mode(&d, theta2, torque1_nm)?.damping_ratio)
-    };
     let c = 2.0 * GAIN_REFERENCE_RATIO * (model.mesh_stiffness_n_per_m * model.mesh_mass_kg(inertia)).sqrt();
-    let added = with(c)? - with(0.0)?;
-    if !(added > 0.0) {
-        return Err(format!("the mesh damper adds no damping to the mesh mode (Δζ = {added})"));
+    let mut failures = Vec::new();
+    for share in [1.0, 0.5, 0.25] {
+        let torque1_nm = share * reference_mesh_force_n(&model.pair) * model.pair.gear1.base_radius_m;
+        for j in 0..STIFFNESS_POSITIONS {
+            let theta2 = (j as f64 + 0.5) / STIFFNESS_POSITIONS as f64 * model.gears[1].pitch_rad();
+            let with = |c: f64| -> Result<f64, String> {
+                let mut d = PmorDynamics::new(model, dynamics.place, dynamics.damping, dynamics.added_inertia_kgm2);
+                d.mesh_damping_n_s_per_m = c;
+                Ok(mesh_mode(&d, theta2, torque1_nm)?.damping_ratio)
+            };
+            match (with(c), with(0.0)) {
+                (Ok(damped), Ok(undamped)) if damped > undamped => {
+                    return Ok((GAIN_REFERENCE_RATIO / (damped - undamped), torque1_nm))
+                }
+                (Ok(damped), Ok(undamped)) => failures.push(format!(
+                    "T₁ = {torque1_nm:.4} N·m, θ₂ = {theta2:.4e} rad: the damper adds no damping ({undamped} → {damped})"
+                )),
+                (Err(e), _) | (_, Err(e)) => failures.push(format!("T₁ = {torque1_nm:.4} N·m, θ₂ = {theta2:.4e} rad: {e}")),
+            }
+        }
     }
-    Ok(GAIN_REFERENCE_RATIO / added)
+    Err(format!("the mesh damper could not be calibrated: {}", failures.join("; ")))
 }
 
 /// The mesh mode of the reduced pair at one mesh position.
