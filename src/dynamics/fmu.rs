@@ -428,8 +428,9 @@ impl GearPairFmu {
 /// five calls each: `scripts/substep_cost.py`):
 /// - lumped: 0.22 µs per sub-step (0.217–0.236) → 4·10⁷ sub-steps ≈ 9 s (h ≤ 400 s at the
 ///   default max_step 1e-5 s);
-/// - PMOR-Hertz: velocity Verlet, the default, 34 µs per sub-step (34.1–34.6) → 10⁵ sub-steps
-///   ≈ 3.4 s (h ≤ 0.14 s at the spur model's max_step 1.4e-6 s); RK4 (`--integrator rk4`)
+/// - PMOR-Hertz: velocity Verlet, the default, 34 µs per sub-step (34.1–34.6) when the bound was
+///   set, 17.3–17.6 µs since issue 24 → 10⁵ sub-steps ≈ 1.8–3.4 s (h ≤ 0.17 s at the spur
+///   model's max_step 1.7e-6 s); RK4 (`--integrator rk4`)
 ///   141 µs (139–142, with the load-sharing shapes; 104 µs before them, which set the bound)
 ///   → 14 s (h ≤ 0.28 s at 2.8e-6 s).
 ///
