@@ -105,55 +105,50 @@ pub struct DynamicBuildReport {
     pub step: IntegratorStep,
 }
 
-/// The default step of a reduced pair with the build's damping and integrator
-/// (`linear::default_step`).
-fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<IntegratorStep, String> {
-    use crate::contact::mesh_kinematics::PairPlacement;
-    use crate::dynamics::pmor::{linear, PmorDynamics};
-    let place = PairPlacement::new(&model.pair);
-    let mut dynamics = PmorDynamics::new(
+/// `f` applied to the reduced pair with the build's modal damping and integrator, no added
+/// inertia and no mesh damper: what the build's linearizations start from.
+fn with_build_dynamics<T>(
+    model: &PmorModel,
+    options: &DynamicBuildOptions,
+    f: impl FnOnce(&mut crate::dynamics::pmor::PmorDynamics) -> T,
+) -> T {
+    let place = crate::contact::mesh_kinematics::PairPlacement::new(&model.pair);
+    let mut dynamics = crate::dynamics::pmor::PmorDynamics::new(
         model,
         &place,
         model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
         [0.0; 2],
     );
     dynamics.integrator = options.integrator;
-    // The FMU starts with the spec's mesh damping ratio: its default step must hold with it.
-    dynamics.mesh_damping_n_s_per_m = model.mesh_damper_n_s_per_m(
-        model.pair.mesh_damping_ratio,
-        [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2],
-    );
-    linear::default_step(&dynamics)
+    f(&mut dynamics)
+}
+
+/// The default step of a reduced pair with the build's damping and integrator
+/// (`linear::default_step`).
+fn integrator_step(model: &PmorModel, options: &DynamicBuildOptions) -> Result<IntegratorStep, String> {
+    with_build_dynamics(model, options, |dynamics| {
+        // The FMU starts with the spec's mesh damping ratio: its default step must hold with it.
+        dynamics.mesh_damping_n_s_per_m = model.mesh_damper_n_s_per_m(
+            model.pair.mesh_damping_ratio,
+            [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2],
+        );
+        crate::dynamics::pmor::linear::default_step(dynamics)
+    })
 }
 
 /// The mesh damper's calibration (`linear::mesh_damper_gain`) with the build's modal damping:
 /// (gain, the load on gear 1 it was found at).
 fn mesh_damper_gain(model: &PmorModel, options: &DynamicBuildOptions) -> Result<(f64, f64), String> {
-    use crate::contact::mesh_kinematics::PairPlacement;
-    use crate::dynamics::pmor::{linear, PmorDynamics};
-    let place = PairPlacement::new(&model.pair);
-    let dynamics = PmorDynamics::new(
-        model,
-        &place,
-        model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
-        [0.0; 2],
-    );
-    linear::mesh_damper_gain(&dynamics)
+    with_build_dynamics(model, options, |dynamics| crate::dynamics::pmor::linear::mesh_damper_gain(dynamics))
 }
 
 /// The reduced pair's mean tangent mesh stiffness at the reference mesh force, with the build's
 /// damping (a static property: damping does not enter it).
 fn mean_mesh_stiffness(model: &PmorModel, options: &DynamicBuildOptions) -> Result<f64, String> {
-    use crate::contact::mesh_kinematics::PairPlacement;
-    use crate::dynamics::pmor::{linear, PmorDynamics};
-    let place = PairPlacement::new(&model.pair);
-    let dynamics = PmorDynamics::new(
-        model,
-        &place,
-        model.damping(options.modal_damping_ratio, options.shape_damping_ratio),
-        [0.0; 2],
-    );
-    linear::mean_mesh_stiffness(&dynamics, linear::reference_mesh_force_n(&model.pair))
+    use crate::dynamics::pmor::linear;
+    with_build_dynamics(model, options, |dynamics| {
+        linear::mean_mesh_stiffness(dynamics, linear::reference_mesh_force_n(&model.pair))
+    })
 }
 
 /// The one-tooth rotation P of a nodal field (all nodes, 3 per node) of the structured gear
