@@ -305,17 +305,57 @@ pub fn mesh_mode(dynamics: &PmorDynamics, theta2: f64, torque1_nm: f64) -> Resul
     let total: f64 = modes.iter().map(|m| m.1).sum();
     let (frequency_hz, amplitude) =
         modes.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1)).ok_or("the pair has no oscillating mode")?;
-    let damping_ratio = lin
-        .flow_eigenvalues()
-        .into_iter()
-        .filter(|l| l.im > 0.0)
-        .min_by(|a, b| {
-            let f = |l: &Complex<f64>| (l.norm() / (2.0 * std::f64::consts::PI) - frequency_hz).abs();
-            f(a).total_cmp(&f(b))
-        })
-        .map(|l| -l.re / l.norm())
-        .ok_or("the flow has no oscillating eigenvalue")?;
+    let damping_ratio = mesh_mode_damping_ratio(dynamics, &s0, [torque1_nm, t2], &lin, frequency_hz)?;
     Ok(MeshMode { frequency_hz, damping_ratio, dte_share: amplitude / total })
+}
+
+/// Steps of the continuation in the mesh damper (`mesh_mode_damping_ratio`).
+const DAMPER_CONTINUATION_STEPS: usize = 10;
+
+/// The damping ratio −Re μ/|μ| of the mesh mode's eigenvalue μ of the damped flow. Without the
+/// mesh damper (damping modal, light) μ is the oscillating eigenvalue whose |μ| is nearest the
+/// undamped mesh frequency. The mesh damper is not proportional: at high ratios it couples the
+/// mesh mode with the body modes, and the nearest |μ| can be another mode's (found at ζ = 0.3 in
+/// single contact). So μ is followed from the damper-free flow as the damper grows to its
+/// value in `DAMPER_CONTINUATION_STEPS` steps, each step taking the eigenvalue nearest the last.
+fn mesh_mode_damping_ratio(
+    dynamics: &PmorDynamics,
+    s0: &PmorState,
+    torques: [f64; 2],
+    lin: &LinearizedPair,
+    frequency_hz: f64,
+) -> Result<f64, String> {
+    let oscillating = |lin: &LinearizedPair| -> Vec<Complex<f64>> {
+        lin.flow_eigenvalues().into_iter().filter(|l| l.im > 0.0).collect()
+    };
+    let nearest_frequency = |eigenvalues: Vec<Complex<f64>>| {
+        eigenvalues
+            .into_iter()
+            .min_by(|a, b| {
+                let f = |l: &Complex<f64>| (l.norm() / (2.0 * std::f64::consts::PI) - frequency_hz).abs();
+                f(a).total_cmp(&f(b))
+            })
+            .ok_or("the flow has no oscillating eigenvalue")
+    };
+    let damper = dynamics.mesh_damping_n_s_per_m;
+    if damper <= 0.0 {
+        let mu = nearest_frequency(oscillating(lin))?;
+        return Ok(-mu.re / mu.norm());
+    }
+    let mut d = PmorDynamics::new(dynamics.model, dynamics.place, dynamics.damping, dynamics.added_inertia_kgm2);
+    d.loading = dynamics.loading;
+    d.integrator = dynamics.integrator;
+    let mut mu = nearest_frequency(oscillating(&linearize(&d, s0, torques)?))?;
+    for k in 1..=DAMPER_CONTINUATION_STEPS {
+        d.mesh_damping_n_s_per_m = damper * k as f64 / DAMPER_CONTINUATION_STEPS as f64;
+        let eigenvalues =
+            if k == DAMPER_CONTINUATION_STEPS { oscillating(lin) } else { oscillating(&linearize(&d, s0, torques)?) };
+        mu = eigenvalues
+            .into_iter()
+            .min_by(|a, b| (*a - mu).norm().total_cmp(&(*b - mu).norm()))
+            .ok_or("the flow has no oscillating eigenvalue")?;
+    }
+    Ok(-mu.re / mu.norm())
 }
 
 /// The Jacobian of the flow at state `s` under constant torques.
