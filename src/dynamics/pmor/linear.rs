@@ -228,9 +228,7 @@ pub fn mesh_damper_gain(dynamics: &PmorDynamics) -> Result<(f64, f64), String> {
         for j in 0..STIFFNESS_POSITIONS {
             let theta2 = (j as f64 + 0.5) / STIFFNESS_POSITIONS as f64 * model.gears[1].pitch_rad();
             let with = |c: f64| -> Result<f64, String> {
-                let mut d = PmorDynamics::new(model, dynamics.place, dynamics.damping, dynamics.added_inertia_kgm2);
-                d.mesh_damping_n_s_per_m = c;
-                Ok(mesh_mode(&d, theta2, torque1_nm)?.damping_ratio)
+                Ok(mesh_mode(&dynamics.with_mesh_damper(c), theta2, torque1_nm)?.damping_ratio)
             };
             match (with(c), with(0.0)) {
                 (Ok(damped), Ok(undamped)) => added.push(damped - undamped),
@@ -342,9 +340,7 @@ fn mesh_mode_damping_ratio(
         let mu = nearest_frequency(oscillating(lin))?;
         return Ok(-mu.re / mu.norm());
     }
-    let mut d = PmorDynamics::new(dynamics.model, dynamics.place, dynamics.damping, dynamics.added_inertia_kgm2);
-    d.loading = dynamics.loading;
-    d.integrator = dynamics.integrator;
+    let mut d = dynamics.with_mesh_damper(0.0);
     let mut mu = nearest_frequency(oscillating(&linearize(&d, s0, torques)?))?;
     for k in 1..=DAMPER_CONTINUATION_STEPS {
         d.mesh_damping_n_s_per_m = damper * k as f64 / DAMPER_CONTINUATION_STEPS as f64;

@@ -166,6 +166,16 @@ impl<'a> PmorDynamics<'a> {
         }
     }
 
+    /// The same pair (damping, inertias, loading, integrator) with another mesh damper (N·s/m):
+    /// what the linearizations that vary the damper start from.
+    pub fn with_mesh_damper(&self, mesh_damping_n_s_per_m: f64) -> PmorDynamics<'a> {
+        let mut d = PmorDynamics::new(self.model, self.place, self.damping, self.added_inertia_kgm2);
+        d.loading = self.loading;
+        d.integrator = self.integrator;
+        d.mesh_damping_n_s_per_m = mesh_damping_n_s_per_m;
+        d
+    }
+
     /// N of gear i's interval starting at stored sample a0 (cached).
     fn gram(&self, i: usize, a0: usize) -> Rc<DMatrix<f64>> {
         let mut cache = self.gram_cache[i].borrow_mut();
