@@ -646,9 +646,14 @@ impl Model for GearPairFmu {
         self.check_stability(s)?;
         s.mech = s.start;
         if let Physics::PmorHertz { model, place } = &self.physics {
-            let start = model.initial_state([s.start.theta_1, s.start.theta_2], [s.start.omega_1, s.start.omega_2]);
+            let dynamics = self.pmor(model, place, s);
+            let start = dynamics.start_state(
+                [s.start.theta_1, s.start.theta_2],
+                [s.start.omega_1, s.start.omega_2],
+                s.torques_nm,
+            )?;
             // The start must be a state the model can evaluate (e.g. no coast-flank contact).
-            s.start_energy_j = self.pmor(model, place, s).outputs(&start)?.total_energy_j();
+            s.start_energy_j = dynamics.outputs(&start)?.total_energy_j();
             s.pmor = Some(start);
         }
         Ok(())
@@ -700,6 +705,7 @@ impl Model for GearPairFmu {
                     finite("the PMOR-Hertz elastic state", &p.eta_dot[i])?;
                 }
                 finite("the PMOR-Hertz rigid state", &[p.theta, p.omega].concat())?;
+                finite("the PMOR-Hertz state's torques", &p.torques_nm)?;
                 finite("the PMOR-Hertz energy terms", &[p.input_work_j, p.dissipated_j, s.start_energy_j])
             }
         }

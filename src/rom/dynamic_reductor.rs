@@ -25,6 +25,7 @@ pub use crate::dynamics::pmor::linear::IntegratorStep;
 use crate::dynamics::pmor::model::{
     FlankRows, Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
 };
+use crate::dynamics::pmor::quasi_static::Condensation;
 use crate::fe::assembly::{self, DofMap};
 use crate::fe::clamped_gear::ClampedGear;
 use crate::fe::eigen;
@@ -56,6 +57,8 @@ pub struct DynamicBuildOptions {
     pub shape_damping_ratio: f64,
     /// The time integrator of the FMU (its default step is a share of this one's limit).
     pub integrator: Integrator,
+    /// Whether the FMU treats the contact shapes and the hub direction as quasi-static.
+    pub condensation: Condensation,
 }
 
 impl Default for DynamicBuildOptions {
@@ -78,6 +81,10 @@ impl Default for DynamicBuildOptions {
             // Velocity Verlet: example 3 at RK4's DTE (0.02 %) in half RK4's wall time, and the
             // soak's energy balance as clean as RK4's (BENCHMARKS, "Integrators").
             integrator: Integrator::Verlet,
+            // The quasi-static condensation is measured (`pmor_dynamics`,
+            // `the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step`) but not yet
+            // the FMU's default: the Python suites have not run against it (issue 24).
+            condensation: Condensation::None,
         }
     }
 }
@@ -551,6 +558,7 @@ pub fn build_dynamic_model(
         mesh_stiffness_n_per_m: 0.0,
         mesh_damper_gain: 1.0,
         integrator: options.integrator,
+        condensation: options.condensation,
         max_step_s: 0.0,
         stability_limit_s: 0.0,
         step_checked_torque_nm: 0.0,

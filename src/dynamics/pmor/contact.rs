@@ -63,16 +63,22 @@ pub struct ContactLoads {
     pub damping_force: [Vec<f64>; 2],
     pub damper_force_n: f64,
     pub damper_power_w: f64,
+    /// The loaded sections' rows, where asked for (the mesh damper, the quasi-static
+    /// condensation's Newton): empty otherwise.
+    pub sections: Vec<SectionRows>,
 }
 
-/// What the mesh damper needs of one loaded section: its elastic force and Hertz tangent
-/// stiffness, and the row of its approach in the slow coordinates of each gear (θ and η_Φ).
-struct DampedSection {
-    flank_sign: f64,
-    force_n: f64,
-    stiffness_n_per_m: f64,
-    /// Per gear: ∂α/∂θ, then the band's rows of Φ along the flank normal (n_k).
-    rows: [Vec<f64>; 2],
+/// One loaded section: its elastic force, its Hertz tangent stiffness and the row through
+/// which its force enters each gear's coordinates — what the mesh damper reads (on θ and η_Φ)
+/// and what the quasi-static condensation's tangent stiffness Σ k_s·r rᵀ is made of.
+#[derive(Debug, Clone)]
+pub struct SectionRows {
+    pub flank_sign: f64,
+    pub force_n: f64,
+    pub stiffness_n_per_m: f64,
+    /// Per gear over (θ, η_Φ, η_Ψ): ∂α/∂θ, then the band's rows of the basis along the flank
+    /// normal (the generalized force on η is −force·row).
+    pub rows: [Vec<f64>; 2],
 }
 
 /// Gear i's elastic approach at a contact point: nᵀũ, with n the flank normal and ũ the
@@ -247,6 +253,7 @@ pub fn contact_loads(
     restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
     loading: Loading,
     damper_n_s_per_m: f64,
+    collect_rows: bool,
 ) -> Result<ContactLoads, String> {
     let p = &model.pair;
     let n_e = [poses[0].eta.len(), poses[1].eta.len()];
@@ -256,7 +263,8 @@ pub fn contact_loads(
         ..Default::default()
     };
     let damped = damper_n_s_per_m > 0.0;
-    let mut damped_sections: Vec<DampedSection> = Vec::new();
+    let collect = damped || collect_rows;
+    let mut sections_loaded: Vec<SectionRows> = Vec::new();
     let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
     let sections = layers.len() - 1;
     let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
@@ -296,11 +304,11 @@ pub fn contact_loads(
                     .map_err(|m| format!("tooth pair {j}, section {}, {flank:?} flanks: {m}", at.section))?;
                 // Generalized forces on η: the Hertz band, pushing into each tooth.
                 let beta = law.half_width(force);
-                let mut section = damped.then(|| DampedSection {
+                let mut section = collect.then(|| SectionRows {
                     flank_sign: flank.sign(),
                     force_n: force,
                     stiffness_n_per_m: 1.0 / law.compliance(force),
-                    rows: [0, 1].map(|i| vec![0.0; 1 + model.gears[i].modes()]),
+                    rows: [0, 1].map(|i| vec![0.0; 1 + n_e[i]]),
                 });
                 for i in 0..2 {
                     let g = &model.gears[i];
@@ -362,7 +370,7 @@ pub fn contact_loads(
                     for i in 0..2 {
                         section.rows[i][0] = alpha_slope[i];
                     }
-                    damped_sections.push(section);
+                    sections_loaded.push(section);
                 }
                 out.normal_force_n += flank.sign() * force;
                 out.potential_j += force * alpha - law.complementary_energy(force);
@@ -375,21 +383,29 @@ pub fn contact_loads(
             }
         }
     }
-    let total_stiffness: f64 = damped_sections.iter().map(|s| s.stiffness_n_per_m).sum();
-    for section in &damped_sections {
-        let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
-        let approach_rate: f64 =
-            (0..2).map(|i| section.rows[i].iter().zip(poses[i].velocity).map(|(r, v)| r * v).sum::<f64>()).sum();
-        let damper = (c * approach_rate).max(-section.force_n);
-        for i in 0..2 {
-            for (k, r) in section.rows[i].iter().enumerate() {
-                out.force[i][k] -= damper * r;
-                out.damping_force[i][k] += damper * r;
+    if damped {
+        // The damper reads θ and η_Φ only (the rows' first 1 + n_k entries).
+        let slow = [1 + model.gears[0].modes(), 1 + model.gears[1].modes()];
+        let total_stiffness: f64 = sections_loaded.iter().map(|s| s.stiffness_n_per_m).sum();
+        for section in &sections_loaded {
+            let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
+            let approach_rate: f64 = (0..2)
+                .map(|i| section.rows[i][..slow[i]].iter().zip(poses[i].velocity).map(|(r, v)| r * v).sum::<f64>())
+                .sum();
+            let damper = (c * approach_rate).max(-section.force_n);
+            for i in 0..2 {
+                for (k, r) in section.rows[i][..slow[i]].iter().enumerate() {
+                    out.force[i][k] -= damper * r;
+                    out.damping_force[i][k] += damper * r;
+                }
             }
+            out.damper_force_n += section.flank_sign * damper;
+            out.damper_power_w += damper * approach_rate;
         }
-        out.damper_force_n += section.flank_sign * damper;
-        out.damper_power_w += damper * approach_rate;
     }
     out.normal_force_n += out.damper_force_n;
+    if collect_rows {
+        out.sections = sections_loaded;
+    }
     Ok(out)
 }

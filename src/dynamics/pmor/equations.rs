@@ -132,8 +132,8 @@ pub struct GearTerms {
     coefficients: DMatrix<f64>,
     products: DMatrix<f64>,
     /// K_Ψ(ϑ), ∂K_Ψ/∂ϑ and the shape damping D_Ψ(ϑ) (n_t × n_t).
-    k_psi: DMatrix<f64>,
-    dk_psi: DMatrix<f64>,
+    pub(super) k_psi: DMatrix<f64>,
+    pub(super) dk_psi: DMatrix<f64>,
     d_psi: DMatrix<f64>,
 }
 
@@ -185,6 +185,34 @@ pub fn modal_damping_root(mass: &DMatrix<f64>, stiffness: &DMatrix<f64>) -> DMat
         * DMatrix::from_diagonal(&eig.eigenvalues.map(|x| x.max(0.0).sqrt()))
         * eig.eigenvectors.transpose();
     &l * root * l.transpose()
+}
+
+/// K_Ψ(ϑ) = Σ wₐw_b K_ab, the shapes' stiffness interpolated at the stencil, and its
+/// ϑ-derivative, into `k_psi` and `dk_psi` (n_t × n_t).
+pub fn shape_stiffness(gear: &PmorGear, st: &Stencil, k_psi: &mut DMatrix<f64>, dk_psi: &mut DMatrix<f64>) {
+    let n_t = gear.shapes;
+    let w = st.weights.w;
+    let dw = st.weights.dw.map(|x| x / st.step);
+    k_psi.fill(0.0);
+    dk_psi.fill(0.0);
+    for a in 0..4 {
+        for b in 0..4 {
+            let (f, df) = (w[a] * w[b], dw[a] * w[b] + w[a] * dw[b]);
+            if f == 0.0 && df == 0.0 {
+                continue;
+            }
+            // K_ab is stored for a ≤ b; K_ba = K_abᵀ.
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            let kab = &gear.pair_invariants(st.a0 + lo, st.a0 + hi).k_ss;
+            for r in 0..n_t {
+                for c in 0..n_t {
+                    let v = if a <= b { kab[(r, c)] } else { kab[(c, r)] };
+                    k_psi[(r, c)] += f * v;
+                    dk_psi[(r, c)] += df * v;
+                }
+            }
+        }
+    }
 }
 
 /// N = BᵀMB of the interval whose stencil starts at stored sample `a0`: the Gram matrix of
@@ -332,28 +360,9 @@ pub fn gear_terms(
     apply_ct(2, force.as_mut_slice());
     force.neg_mut();
 
-    // Elastic: Λ on Φ, K_Ψ(ϑ) = Σ wₐw_b K_ab on the shapes, and its ϑ-derivative.
+    // Elastic: Λ on Φ, K_Ψ(ϑ) on the shapes, and its ϑ-derivative.
     let (k_psi, dk_psi) = (&mut out.k_psi, &mut out.dk_psi);
-    k_psi.fill(0.0);
-    dk_psi.fill(0.0);
-    for a in 0..4 {
-        for b in 0..4 {
-            let (f, df) = (w[a] * w[b], dw[a] * w[b] + w[a] * dw[b]);
-            if f == 0.0 && df == 0.0 {
-                continue;
-            }
-            // K_ab is stored for a ≤ b; K_ba = K_abᵀ.
-            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-            let kab = &gear.pair_invariants(st.a0 + lo, st.a0 + hi).k_ss;
-            for r in 0..n_t {
-                for c in 0..n_t {
-                    let v = if a <= b { kab[(r, c)] } else { kab[(c, r)] };
-                    k_psi[(r, c)] += f * v;
-                    dk_psi[(r, c)] += df * v;
-                }
-            }
-        }
-    }
+    shape_stiffness(gear, st, k_psi, dk_psi);
     let mut elastic = 0.0;
     for r in 0..n_t {
         let (mut k_eta, mut dk_eta) = (0.0, 0.0);

@@ -107,7 +107,8 @@ impl<'a> PmorDynamics<'a> {
             for k in 0..n_q {
                 dissipated += 0.5 * (start.damping_force[k] + end.damping_force[k]) * (predicted[k] - y[k]);
             }
-            let input = torques[0] * (predicted[l.q(0)] - y[l.q(0)]) + torques[1] * (predicted[l.q(1)] - y[l.q(1)]);
+            let input = torques[0] * (end.bore_theta[0] - start.bore_theta[0])
+                + torques[1] * (end.bore_theta[1] - start.bore_theta[1]);
             for k in 0..n_q {
                 y[k] = predicted[k];
                 y[n_q + k] += 0.5 * h * next[n_q + k];

@@ -129,7 +129,8 @@ pub fn static_equilibrium(
     let mut s = model.initial_state([(rb[1] * theta2 + te_guess_m) / rb[0], theta2], [0.0; 2]);
     let mut y = dynamics.pack(&s);
     let n = y.len() / 2 - 1;
-    let i_theta2 = 1 + model.gears[0].elastic_size();
+    // Gear 2's angle coordinate (its mean axis where the model is condensed).
+    let i_theta2 = dynamics.layout().q(1);
     // Unknowns: q without θ₂, then τ₂. Residuals: all n accelerations.
     let unknowns: Vec<usize> = (0..n).filter(|&k| k != i_theta2).collect();
     let mut torque2 = -torque1_nm * rb[1] / rb[0];
@@ -150,10 +151,21 @@ pub fn static_equilibrium(
         }
         let h = 1e-3 * torque1_nm.abs().max(1.0);
         jac.set_column(n - 1, &((residual(&y, torque2 + h)? - residual(&y, torque2 - h)?) / (2.0 * h)));
-        let step = jac.lu().solve(&(-&r)).ok_or("the static equilibrium's Jacobian is singular")?;
-        for (col, &k) in unknowns.iter().enumerate() {
-            y[k] += step[col];
+        let mut step = jac.lu().solve(&(-&r)).ok_or("the static equilibrium's Jacobian is singular")?;
+        // A full step can overshoot into a contact beyond the Hertz law's range (b > h/4) where
+        // the quasi-static shapes have not yet relieved it: halve it until the pair evaluates.
+        let mut trial = y.clone();
+        for halving in 0.. {
+            for (col, &k) in unknowns.iter().enumerate() {
+                trial[k] = y[k] + step[col];
+            }
+            match residual(&trial, torque2 + step[n - 1]) {
+                Ok(_) => break,
+                Err(e) if halving >= 6 => return Err(e),
+                Err(_) => step *= 0.5,
+            }
         }
+        y = trial;
         torque2 += step[n - 1];
         let size = unknowns.iter().enumerate().map(|(c, &k)| (step[c] / scale[k]).abs()).fold(0.0, f64::max);
         if size < 1e-10 {
@@ -280,7 +292,7 @@ pub fn mesh_mode(dynamics: &PmorDynamics, theta2: f64, torque1_nm: f64) -> Resul
     let dq = DVector::from_iterator(n, (0..n).map(|k| y1[k] - y0[k]));
     let mut d = DVector::zeros(n);
     d[0] = rb[0];
-    d[1 + model.gears[0].elastic_size()] = -rb[1];
+    d[dynamics.layout().q(1)] = -rb[1];
     let mut modes: Vec<(f64, f64)> = Vec::new();
     for lambda in a.complex_eigenvalues().iter() {
         if lambda.re < 1.0 {

@@ -22,6 +22,7 @@ pub mod integrator;
 pub mod interpolation;
 pub mod linear;
 pub mod model;
+pub mod quasi_static;
 
 use crate::contact::mesh_kinematics::PairPlacement;
 use contact::{contact_loads, ContactLoads, GearPose, Loading};
@@ -29,6 +30,7 @@ use equations::{gear_terms, Damping, GearTerms, Stencil};
 use integrator::Integrator;
 use model::PmorModel;
 use nalgebra::{DMatrix, DVector};
+use quasi_static::{Condensation, QuasiStatic};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -42,6 +44,9 @@ pub struct PmorState {
     pub eta: [Vec<f64>; 2],
     pub eta_dot: [Vec<f64>; 2],
     pub anchor: [i64; 2],
+    /// The torques (N·m) the quasi-static coordinates are in equilibrium with
+    /// (`quasi_static`): a change books the work of the move to the new equilibrium.
+    pub torques_nm: [f64; 2],
     /// ∫Σ τᵢωᵢ dt and ∫η̇ᵀDη̇ dt (J): the energy balance's external terms.
     pub input_work_j: f64,
     pub dissipated_j: f64,
@@ -56,6 +61,8 @@ pub struct PmorOutputs {
     pub contact: ContactLoads,
     /// The damping force Dq̇ over both gears' (θ, η), laid out as the coordinates of y.
     pub damping_force: Vec<f64>,
+    /// The bore angles θ (rad): where the external torques do their work.
+    pub bore_theta: [f64; 2],
 }
 
 impl PmorOutputs {
@@ -85,6 +92,10 @@ pub struct PmorDynamics<'a> {
     gram_cache: [RefCell<Option<(usize, Rc<DMatrix<f64>>)>>; 2],
     /// Each gear's terms, computed in place (no allocation per right-hand side).
     terms: [RefCell<GearTerms>; 2],
+    /// The quasi-static condensation (`quasi_static`), where the model asks for it.
+    quasi_static: Option<QuasiStatic>,
+    /// Why the condensation could not be set up (reported by the first right-hand side).
+    setup_error: Option<String>,
 }
 
 impl PmorModel {
@@ -114,6 +125,7 @@ impl PmorModel {
             eta: [0, 1].map(|i| vec![0.0; self.gears[i].elastic_size()]),
             eta_dot: [0, 1].map(|i| vec![0.0; self.gears[i].elastic_size()]),
             anchor: [0, 0],
+            torques_nm: [0.0; 2],
             input_work_j: 0.0,
             dissipated_j: 0.0,
         };
@@ -125,23 +137,23 @@ impl PmorModel {
 }
 
 /// Layout of the flat state y: per gear [θ, η], then per gear [θ̇, η̇], then the two work
-/// integrals.
-struct Layout {
-    n_q: [usize; 2],
+/// integrals. Condensed (`quasi_static`), per gear [φ, ξ] and their rates.
+pub struct Layout {
+    pub n_q: [usize; 2],
 }
 
 impl Layout {
-    fn q(&self, i: usize) -> usize {
+    pub fn q(&self, i: usize) -> usize {
         if i == 0 {
             0
         } else {
             self.n_q[0]
         }
     }
-    fn v(&self, i: usize) -> usize {
+    pub fn v(&self, i: usize) -> usize {
         self.n_q[0] + self.n_q[1] + self.q(i)
     }
-    fn len(&self) -> usize {
+    pub fn len(&self) -> usize {
         2 * (self.n_q[0] + self.n_q[1]) + 2
     }
 }
@@ -153,6 +165,13 @@ impl<'a> PmorDynamics<'a> {
         damping: [Damping; 2],
         added_inertia_kgm2: [f64; 2],
     ) -> Self {
+        let (quasi_static, setup_error) = match model.condensation {
+            Condensation::None => (None, None),
+            Condensation::QuasiStatic => match QuasiStatic::new(model, added_inertia_kgm2) {
+                Ok(q) => (Some(q), None),
+                Err(e) => (None, Some(e)),
+            },
+        };
         PmorDynamics {
             model,
             place,
@@ -163,13 +182,34 @@ impl<'a> PmorDynamics<'a> {
             integrator: model.integrator,
             gram_cache: Default::default(),
             terms: [0, 1].map(|i| RefCell::new(GearTerms::new(&model.gears[i]))),
+            quasi_static,
+            setup_error,
         }
+    }
+
+    /// Another treatment of the stiff coordinates than the model's (`quasi_static`): the same
+    /// model file carries what both need, so a run can be checked against the other.
+    pub fn set_condensation(&mut self, condensation: Condensation) {
+        (self.quasi_static, self.setup_error) = match condensation {
+            Condensation::None => (None, None),
+            Condensation::QuasiStatic => match QuasiStatic::new(self.model, self.added_inertia_kgm2) {
+                Ok(q) => (Some(q), None),
+                Err(e) => (None, Some(e)),
+            },
+        };
     }
 
     /// The same pair (damping, inertias, loading, integrator) with another mesh damper (N·s/m):
     /// what the linearizations that vary the damper start from.
     pub fn with_mesh_damper(&self, mesh_damping_n_s_per_m: f64) -> PmorDynamics<'a> {
         let mut d = PmorDynamics::new(self.model, self.place, self.damping, self.added_inertia_kgm2);
+        if self.quasi_static.is_some() != d.quasi_static.is_some() {
+            d.set_condensation(if self.quasi_static.is_some() {
+                Condensation::QuasiStatic
+            } else {
+                Condensation::None
+            });
+        }
         d.loading = self.loading;
         d.integrator = self.integrator;
         d.mesh_damping_n_s_per_m = mesh_damping_n_s_per_m;
@@ -189,11 +229,14 @@ impl<'a> PmorDynamics<'a> {
         }
     }
 
-    fn layout(&self) -> Layout {
-        Layout { n_q: [1 + self.model.gears[0].elastic_size(), 1 + self.model.gears[1].elastic_size()] }
+    pub fn layout(&self) -> Layout {
+        match &self.quasi_static {
+            Some(q) => Layout { n_q: [1 + q.splits[0].slow_size(), 1 + q.splits[1].slow_size()] },
+            None => Layout { n_q: [1 + self.model.gears[0].elastic_size(), 1 + self.model.gears[1].elastic_size()] },
+        }
     }
 
-    fn stencil(&self, i: usize, anchor: i64, theta: f64) -> Result<Stencil, String> {
+    pub(crate) fn stencil(&self, i: usize, anchor: i64, theta: f64) -> Result<Stencil, String> {
         let g = &self.model.gears[i];
         let theta_ref = theta - anchor as f64 * g.pitch_rad();
         // Within one integrator step a gear turns by far less than a sample interval; an angle
@@ -217,11 +260,15 @@ impl<'a> PmorDynamics<'a> {
     pub fn pack(&self, s: &PmorState) -> Vec<f64> {
         let l = self.layout();
         let mut y = vec![0.0; l.len()];
-        for i in 0..2 {
-            y[l.q(i)] = s.theta[i];
-            y[l.q(i) + 1..l.q(i) + l.n_q[i]].copy_from_slice(&s.eta[i]);
-            y[l.v(i)] = s.omega[i];
-            y[l.v(i) + 1..l.v(i) + l.n_q[i]].copy_from_slice(&s.eta_dot[i]);
+        if let Some(qs) = &self.quasi_static {
+            self.condensed_pack(qs, s, &mut y);
+        } else {
+            for i in 0..2 {
+                y[l.q(i)] = s.theta[i];
+                y[l.q(i) + 1..l.q(i) + l.n_q[i]].copy_from_slice(&s.eta[i]);
+                y[l.v(i)] = s.omega[i];
+                y[l.v(i) + 1..l.v(i) + l.n_q[i]].copy_from_slice(&s.eta_dot[i]);
+            }
         }
         let n = y.len();
         y[n - 2] = s.input_work_j;
@@ -229,13 +276,18 @@ impl<'a> PmorDynamics<'a> {
         y
     }
 
+    /// The state at y; condensed, with the fast coordinates of the last right-hand side.
     pub fn unpack(&self, y: &[f64], s: &mut PmorState) {
         let l = self.layout();
-        for i in 0..2 {
-            s.theta[i] = y[l.q(i)];
-            s.eta[i].copy_from_slice(&y[l.q(i) + 1..l.q(i) + l.n_q[i]]);
-            s.omega[i] = y[l.v(i)];
-            s.eta_dot[i].copy_from_slice(&y[l.v(i) + 1..l.v(i) + l.n_q[i]]);
+        if let Some(qs) = &self.quasi_static {
+            self.condensed_unpack(qs, y, s);
+        } else {
+            for i in 0..2 {
+                s.theta[i] = y[l.q(i)];
+                s.eta[i].copy_from_slice(&y[l.q(i) + 1..l.q(i) + l.n_q[i]]);
+                s.omega[i] = y[l.v(i)];
+                s.eta_dot[i].copy_from_slice(&y[l.v(i) + 1..l.v(i) + l.n_q[i]]);
+            }
         }
         s.input_work_j = y[y.len() - 2];
         s.dissipated_j = y[y.len() - 1];
@@ -243,6 +295,12 @@ impl<'a> PmorDynamics<'a> {
 
     /// ẏ at y (anchors fixed), and the outputs there.
     pub fn rhs(&self, y: &[f64], anchor: [i64; 2], torques: [f64; 2]) -> Result<(Vec<f64>, PmorOutputs), String> {
+        if let Some(e) = &self.setup_error {
+            return Err(e.clone());
+        }
+        if let Some(qs) = &self.quasi_static {
+            return self.condensed_rhs(qs, y, anchor, torques);
+        }
         let l = self.layout();
         let stencils = [self.stencil(0, anchor[0], y[l.q(0)])?, self.stencil(1, anchor[1], y[l.q(1)])?];
         let damped = self.mesh_damping_n_s_per_m > 0.0;
@@ -261,6 +319,7 @@ impl<'a> PmorDynamics<'a> {
             &restage,
             self.loading,
             self.mesh_damping_n_s_per_m,
+            false,
         )?;
         let mut dy = vec![0.0; y.len()];
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
@@ -282,6 +341,7 @@ impl<'a> PmorDynamics<'a> {
             );
             out.kinetic_j += terms.kinetic_j + 0.5 * self.added_inertia_kgm2[i] * y[l.v(i)].powi(2);
             out.elastic_j += terms.elastic_j;
+            out.bore_theta[i] = y[l.q(i)];
             dissipation += terms.damping_force.iter().zip(&y[l.v(i)..l.v(i) + n]).map(|(f, v)| f * v).sum::<f64>();
             let damping_force = &mut out.damping_force[l.q(i)..l.q(i) + n];
             for ((d, t), c) in damping_force.iter_mut().zip(terms.damping_force.iter()).zip(&contact.damping_force[i]) {
@@ -316,6 +376,16 @@ impl<'a> PmorDynamics<'a> {
     /// The DTE stays bore to bore, as `fmu-build ste` measures it.
     pub fn port(&self, i: usize, s: &PmorState) -> Result<(f64, f64), String> {
         let g = &self.model.gears[i];
+        if let Some(qs) = &self.quasi_static {
+            // The slow angle φ and its rate: the shapes carry no inertia here.
+            let sp = &qs.splits[i];
+            let n_k = g.modes();
+            let dot = |a: &[f64]| sp.b.as_slice().iter().zip(a).map(|(x, y)| x * y).sum::<f64>();
+            return Ok((
+                s.theta[i] + dot(&s.eta[i][..n_k]) / sp.inertia_kgm2,
+                s.omega[i] + dot(&s.eta_dot[i][..n_k]) / sp.inertia_kgm2,
+            ));
+        }
         let st = self.stencil(i, s.anchor[i], s.theta[i])?;
         let n_k = g.modes();
         let (eta_phi, eta_psi) = s.eta[i].split_at(n_k);
@@ -338,7 +408,23 @@ impl<'a> PmorDynamics<'a> {
 
     /// Energies and contact at a state.
     pub fn outputs(&self, s: &PmorState) -> Result<PmorOutputs, String> {
+        if let Some(qs) = &self.quasi_static {
+            return self.condensed_outputs(qs, s);
+        }
         Ok(self.rhs(&self.pack(s), s.anchor, [0.0; 2])?.1)
+    }
+
+    /// The state a run starts from: at the given angles and speeds, the elastic coordinates at
+    /// rest in their frames; condensed, the quasi-static ones at their equilibrium under `torques`.
+    pub fn start_state(&self, theta: [f64; 2], omega: [f64; 2], torques: [f64; 2]) -> Result<PmorState, String> {
+        let mut s = self.model.initial_state(theta, omega);
+        s.torques_nm = torques;
+        if let Some(qs) = &self.quasi_static {
+            let y = self.pack(&s);
+            self.condensed_rhs(qs, &y, s.anchor, torques)?;
+            self.condensed_unpack(qs, &y, &mut s);
+        }
+        Ok(s)
     }
 
     /// One RK4 step of length h with the torques held, then the anchors re-set.
@@ -355,7 +441,15 @@ impl<'a> PmorDynamics<'a> {
         if next.iter().any(|v| !v.is_finite()) {
             return Err(format!("the PMOR-Hertz state became non-finite at step {h} s: the step is too large"));
         }
+        let bore = s.theta;
+        if self.quasi_static.is_some() {
+            self.rhs(&next, a, torques)?; // the fast coordinates at the step's end
+        }
         self.unpack(&next, s);
+        if self.quasi_static.is_some() {
+            // The external torques' work on the bores' travel (the flow books none).
+            s.input_work_j += torques[0] * (s.theta[0] - bore[0]) + torques[1] * (s.theta[1] - bore[1]);
+        }
         self.reanchor(s);
         Ok(())
     }
@@ -382,6 +476,7 @@ impl<'a> PmorDynamics<'a> {
 
     /// Advances by `duration` in steps of `self.integrator` no longer than `max_step`.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
+        self.settle(s, torques)?;
         match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
             Integrator::Verlet => self.verlet_advance(s, torques, duration, max_step),

@@ -189,6 +189,8 @@ pub struct PmorModel {
     pub mesh_damper_gain: f64,
     /// The time integrator the FMU steps with (`integrator`).
     pub integrator: Integrator,
+    /// Whether the contact shapes and the hub direction are quasi-static (`quasi_static`).
+    pub condensation: crate::dynamics::pmor::quasi_static::Condensation,
     /// The internal step bound the FMU starts with (s): a fraction of the integrator's stability
     /// limit on the pair linearized at a load above its range (`rom::dynamic_reductor`), so the
     /// step follows the stiffest mode of this model instead of a constant.

@@ -1,0 +1,529 @@
+//! The quasi-static condensation of the stiff coordinates (issue 24's "step set by the physics").
+//!
+//! Two groups of the reduced pair's coordinates carry no physics a drivetrain resolves, yet bound
+//! an explicit step:
+//!
+//! - **the contact shapes η_Ψ** against the Hertz contact (30–100 kHz on the default spur pair):
+//!   the static residual of the tooth's local deflection, whose dynamics the fixed-interface
+//!   modes Φ already carry up to their highest frequency;
+//! - **the hub direction**: the bore is the floating frame and, alone, carries 1–2 % of the
+//!   gear's inertia, so the bore rings against the rim at 40–60 kHz.
+//!
+//! Both are made quasi-static: their inertia is dropped and, at every evaluation of the
+//! right-hand side, they take the values at which the forces on them balance (Newton's method
+//! with the contact's tangent stiffness, from the last solution). What is integrated is the
+//! slow part, in the gear's mean-axis frame: per gear the angle φ = θ + bᵀη_Φ/J (b = (Gx)ᵀMΦ,
+//! J the rigid inertia at the bore; `PmorDynamics::port`) and the body-mode coordinates ξ in
+//! the complement of the hub direction b̂ = b/|b|, η_Φ = Q·ξ + b̂·η_b. In these coordinates the
+//! kinetic energy with η̇_b = η̇_Ψ = 0 is ½Jφ̇² + ½ξ̇ᵀ·Qᵀ(M_ΦΦ − bbᵀ/J)Q·ξ̇: a constant mass
+//! matrix, so no Gram products, no quadratic velocity terms.
+//!
+//! The system stays Lagrangian (a degenerate one: T independent of ż), so energy stays the
+//! referee: E = T + U + W with the fast coordinates at their equilibrium, and the external
+//! torque, which acts at the bore θ = φ − β·η_b (β = |b|/J), does the work τ·Δθ. When a master
+//! changes a torque between calls the fast coordinates move at once to the new equilibrium;
+//! the work of that move is booked by the trapezoid rule ½(τ_old + τ_new)·Δθ, exact for a
+//! linear hub.
+//!
+//! Damping acts on the slow coordinates only: the modal damping of Φ on η̇_Φ = Q·ξ̇, and the
+//! mesh damper on the approach rate the slow motion makes. The shapes' own damping ratio has
+//! no coordinate to act on and is not used.
+//!
+//! The hub direction is condensed only where its free frequency (the pencil (Λ, M_ΦΦ − bbᵀ/J))
+//! lies above `HUB_CUTOFF` × the highest retained body mode: a bore given a shaft's inertia
+//! (`inertia_i` above the FE value) has a physical hub mode, which stays.
+
+use super::contact::{contact_loads, GearPose};
+use super::equations::shape_stiffness;
+use super::{Layout, PmorDynamics, PmorOutputs, PmorState};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+use std::cell::RefCell;
+
+/// How the elastic coordinates are integrated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Condensation {
+    /// Every coordinate carries its inertia (the paper's model). The step is bounded by the
+    /// shapes against the contact (≈ 100 kHz) and the hub mode.
+    None,
+    /// The contact shapes and the hub direction quasi-static (this module); the step is bounded
+    /// by the retained body modes and the mesh.
+    QuasiStatic,
+}
+
+/// The hub direction is condensed when its free frequency exceeds this multiple of the highest
+/// retained fixed-interface body mode.
+pub const HUB_CUTOFF: f64 = 1.5;
+
+/// Newton's iterations on the fast coordinates before giving up.
+const NEWTON_ITERATIONS: usize = 40;
+
+/// Newton stops when the decrement ΔzᵀKΔz falls below this fraction of the potential energy
+/// (plus an absolute floor far below any loaded pair's, J): |Δz|/|z| ≈ 1e-8, far inside the
+/// linearization's central differences (relative 1e-6). The decrement's round-off floor is
+/// about 2e-20 of the potential (measured on the default spur pair in example 3), so this is
+/// the tightest test that round-off cannot defeat; quadratic convergence usually lands far
+/// below it.
+const NEWTON_RELATIVE_DECREMENT: f64 = 1e-16;
+const NEWTON_FLOOR_J: f64 = 1e-24;
+
+/// One gear's split of η_Φ into the slow part Q·ξ and the hub direction b̂.
+#[derive(Debug, Clone)]
+pub struct GearSplit {
+    /// Whether the hub direction is condensed (else Q = I and η_b does not exist).
+    pub hub: bool,
+    /// b = (Gx)ᵀMΦ and b̂ = b/|b| (n_k).
+    pub b: DVector<f64>,
+    pub b_hat: DVector<f64>,
+    /// J (kg·m²): the FE body's polar inertia plus the added.
+    pub inertia_kgm2: f64,
+    /// Q (n_k × n_ξ): orthonormal columns, the complement of b̂ (or the identity).
+    pub basis: DMatrix<f64>,
+    /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
+    pub xi_mass: DMatrix<f64>,
+    xi_mass_factor: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    /// The hub mode's free frequency (Hz) the choice was made on.
+    pub hub_frequency_hz: f64,
+}
+
+impl GearSplit {
+    pub fn new(gear: &super::model::PmorGear, added_inertia_kgm2: f64) -> Result<Self, String> {
+        let n_k = gear.modes();
+        let inertia = gear.polar_inertia_kgm2 + added_inertia_kgm2;
+        let b = gear.gx_phi.clone();
+        let b_norm = b.norm();
+        let b_hat = &b / b_norm;
+        // The pencil (Λ, M − bbᵀ/J): its highest frequency is the hub mode where the bore is light.
+        let mass = &gear.phi_phi - &b * b.transpose() / inertia;
+        let l = mass.clone().cholesky().ok_or("the mean-axis mass M_ΦΦ − bbᵀ/J is not positive definite")?.l();
+        let l_inv = l.try_inverse().ok_or("singular mean-axis mass")?;
+        let lambda = DMatrix::from_diagonal(&DVector::from_column_slice(&gear.eigenvalues));
+        let a = &l_inv * lambda * l_inv.transpose();
+        let top = nalgebra::SymmetricEigen::new((&a + a.transpose()) * 0.5).eigenvalues.max();
+        let hub_frequency_hz = top.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
+        let body_top_hz = gear.eigenvalues.iter().cloned().fold(0.0, f64::max).sqrt() / (2.0 * std::f64::consts::PI);
+        let hub = n_k > 1 && hub_frequency_hz > HUB_CUTOFF * body_top_hz;
+        let basis = if hub { complement(&b_hat) } else { DMatrix::identity(n_k, n_k) };
+        let xi_mass = basis.transpose() * &mass * &basis;
+        let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
+        Ok(GearSplit { hub, b, b_hat, inertia_kgm2: inertia, basis, xi_mass, xi_mass_factor, hub_frequency_hz })
+    }
+
+    /// Slow coordinates besides φ: n_ξ.
+    pub fn slow_size(&self) -> usize {
+        self.basis.ncols()
+    }
+
+    /// Fast coordinates: η_b (where the hub is condensed) and η_Ψ.
+    pub fn fast_size(&self, shapes: usize) -> usize {
+        self.hub as usize + shapes
+    }
+}
+
+/// An orthonormal basis of the complement of the unit vector `u` (n × (n − 1)): the last
+/// n − 1 columns of the Householder reflection H = I − 2vvᵀ/vᵀv, v = u ± e₁, which maps u to ∓e₁.
+fn complement(u: &DVector<f64>) -> DMatrix<f64> {
+    let n = u.len();
+    let mut v = u.clone();
+    v[0] += if u[0] >= 0.0 { 1.0 } else { -1.0 };
+    let h = DMatrix::identity(n, n) - &v * v.transpose() * (2.0 / v.norm_squared());
+    h.columns(1, n - 1).into_owned()
+}
+
+/// The condensation of both gears, and the fast coordinates of the last solve (the next
+/// Newton's start).
+pub struct QuasiStatic {
+    pub splits: [GearSplit; 2],
+    fast: RefCell<[Vec<f64>; 2]>,
+    /// The last two solves' slow positions and fast coordinates (newest last): Newton's start
+    /// is the secant through them, so a time step starts within O(h²) of the solution.
+    history: RefCell<Vec<(Vec<f64>, [Vec<f64>; 2])>>,
+    /// Contact evaluations and solves so far (Newton's cost, for the benchmarks).
+    pub counts: std::cell::Cell<(usize, usize)>,
+}
+
+impl QuasiStatic {
+    pub fn new(dynamics_model: &super::model::PmorModel, added_inertia_kgm2: [f64; 2]) -> Result<Self, String> {
+        let splits = [
+            GearSplit::new(&dynamics_model.gears[0], added_inertia_kgm2[0])?,
+            GearSplit::new(&dynamics_model.gears[1], added_inertia_kgm2[1])?,
+        ];
+        let fast = [0, 1].map(|i| vec![0.0; splits[i].fast_size(dynamics_model.gears[i].shapes)]);
+        Ok(QuasiStatic {
+            splits,
+            fast: RefCell::new(fast),
+            history: RefCell::new(Vec::with_capacity(2)),
+            counts: Default::default(),
+        })
+    }
+}
+
+/// The forces at one (slow, fast) point.
+struct Evaluation {
+    /// The force on the fast coordinates (zero at their equilibrium), both gears stacked.
+    residual: DVector<f64>,
+    /// Its tangent stiffness −∂residual/∂z (elastic and contact; the contact's angle terms
+    /// left out: Newton's matrix needs to be close, not exact).
+    tangent: Option<DMatrix<f64>>,
+    /// The slow accelerations (φ̈, ξ̈) per gear, in the layout's q order.
+    acceleration: Vec<f64>,
+    /// The dissipation power (W): modal damping and the mesh damper on the slow motion.
+    dissipation_w: f64,
+    outputs: PmorOutputs,
+}
+
+impl<'a> PmorDynamics<'a> {
+    pub fn condensed(&self) -> Option<&QuasiStatic> {
+        self.quasi_static.as_ref()
+    }
+
+    /// Per gear: η_Φ, η_Ψ, θ, and (θ̇, η̇_Φ) of the slow motion, from y and the fast z.
+    fn expand(&self, qs: &QuasiStatic, l: &Layout, y: &[f64], i: usize, z: &[f64]) -> (Vec<f64>, f64, Vec<f64>) {
+        let g = &self.model.gears[i];
+        let sp = &qs.splits[i];
+        let n_x = sp.slow_size();
+        let xi = DVector::from_column_slice(&y[l.q(i) + 1..l.q(i) + 1 + n_x]);
+        let xi_dot = DVector::from_column_slice(&y[l.v(i) + 1..l.v(i) + 1 + n_x]);
+        let mut eta_phi = &sp.basis * xi;
+        if sp.hub {
+            eta_phi.axpy(z[0], &sp.b_hat, 1.0);
+        }
+        let eta_phi_dot = &sp.basis * xi_dot;
+        let theta = y[l.q(i)] - sp.b.dot(&eta_phi) / sp.inertia_kgm2;
+        let theta_dot = y[l.v(i)] - sp.b.dot(&eta_phi_dot) / sp.inertia_kgm2;
+        let mut eta = Vec::with_capacity(g.elastic_size());
+        eta.extend_from_slice(eta_phi.as_slice());
+        eta.extend_from_slice(&z[sp.hub as usize..]);
+        let mut velocity = Vec::with_capacity(1 + g.modes());
+        velocity.push(theta_dot);
+        velocity.extend_from_slice(eta_phi_dot.as_slice());
+        (eta, theta, velocity)
+    }
+
+    /// The forces with the slow state y and the fast coordinates z.
+    fn evaluate(
+        &self,
+        qs: &QuasiStatic,
+        y: &[f64],
+        z: &[Vec<f64>; 2],
+        anchor: [i64; 2],
+        torques: [f64; 2],
+        tangent: bool,
+    ) -> Result<Evaluation, String> {
+        let (evaluations, solves) = qs.counts.get();
+        qs.counts.set((evaluations + 1, solves));
+        let l = self.layout();
+        let model = self.model;
+        let (e0, e1) = (self.expand(qs, &l, y, 0, &z[0]), self.expand(qs, &l, y, 1, &z[1]));
+        let expanded = [e0, e1];
+        let stencils = [self.stencil(0, anchor[0], expanded[0].1)?, self.stencil(1, anchor[1], expanded[1].1)?];
+        let damped = self.mesh_damping_n_s_per_m > 0.0;
+        let poses = [0, 1].map(|i| GearPose {
+            theta: expanded[i].1,
+            anchor: anchor[i],
+            stencil: stencils[i],
+            eta: &expanded[i].0,
+            velocity: if damped { &expanded[i].2 } else { &[] },
+        });
+        let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
+        let contact = contact_loads(
+            model,
+            self.place,
+            [&poses[0], &poses[1]],
+            &restage,
+            self.loading,
+            self.mesh_damping_n_s_per_m,
+            tangent,
+        )?;
+        let n_z = [z[0].len(), z[1].len()];
+        let mut residual = DVector::zeros(n_z[0] + n_z[1]);
+        let mut tangent_matrix = tangent.then(|| DMatrix::zeros(n_z[0] + n_z[1], n_z[0] + n_z[1]));
+        let mut acceleration = vec![0.0; l.n_q[0] + l.n_q[1]];
+        let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
+        let mut dissipation = contact.damper_power_w;
+        for i in 0..2 {
+            let g = &model.gears[i];
+            let sp = &qs.splits[i];
+            let (n_k, n_t) = (g.modes(), g.shapes);
+            let (eta, theta, velocity) = &expanded[i];
+            let (eta_phi, eta_psi) = eta.split_at(n_k);
+            let z_off = if i == 0 { 0 } else { n_z[0] };
+            // The elastic forces in (θ, η_Φ, η_Ψ): the contact's (its damper part removed), the
+            // bodies' and the external torque.
+            let elastic_contact = |k: usize| contact.force[i][k] + contact.damping_force[i][k];
+            let mut terms = self.terms[i].borrow_mut();
+            let terms = &mut *terms;
+            shape_stiffness(g, &stencils[i], &mut terms.k_psi, &mut terms.dk_psi);
+            let psi = DVector::from_column_slice(eta_psi);
+            let k_psi_eta = &terms.k_psi * &psi;
+            let f_theta = elastic_contact(0) + torques[i] - 0.5 * psi.dot(&(&terms.dk_psi * &psi));
+            let f_phi = DVector::from_fn(n_k, |j, _| elastic_contact(1 + j) - g.eigenvalues[j] * eta_phi[j]);
+            // The slow motion's damping forces in (θ, η_Φ): the damper's and the modal one.
+            let eta_phi_dot = &velocity[1..];
+            let modal = DVector::from_fn(n_k, |j, _| {
+                2.0 * self.damping[i].modes_ratio * g.eigenvalues[j].sqrt() * eta_phi_dot[j]
+            });
+            let d_theta = contact.damping_force[i][0];
+            let d_phi = DVector::from_fn(n_k, |j, _| contact.damping_force[i][1 + j] + modal[j]);
+            dissipation += modal.iter().zip(eta_phi_dot).map(|(f, v)| f * v).sum::<f64>();
+            // To the slow coordinates: on φ the θ force, on ξ Qᵀ(f_Φ − b·f_θ/J).
+            let to_xi = |f_t: f64, f_p: &DVector<f64>| sp.basis.transpose() * (f_p - &sp.b * (f_t / sp.inertia_kgm2));
+            let q = l.q(i);
+            acceleration[q] = (f_theta - d_theta) / sp.inertia_kgm2;
+            let xi_force = to_xi(f_theta - d_theta, &(&f_phi - &d_phi));
+            let xi_acc = sp.xi_mass_factor.solve(&xi_force);
+            acceleration[q + 1..q + l.n_q[i]].copy_from_slice(xi_acc.as_slice());
+            out.damping_force[q] = d_theta;
+            out.damping_force[q + 1..q + l.n_q[i]].copy_from_slice(to_xi(d_theta, &d_phi).as_slice());
+            // The fast coordinates' residual: b̂ᵀf_Φ − β·f_θ on η_b, f_Ψ on η_Ψ.
+            let beta = sp.b.norm() / sp.inertia_kgm2;
+            let mut r = z_off;
+            if sp.hub {
+                residual[r] = sp.b_hat.dot(&f_phi) - beta * f_theta;
+                r += 1;
+            }
+            for m in 0..n_t {
+                residual[r + m] = elastic_contact(1 + n_k + m) - k_psi_eta[m];
+            }
+            if let Some(t) = tangent_matrix.as_mut() {
+                let mut r = z_off;
+                if sp.hub {
+                    t[(r, r)] += (0..n_k).map(|j| g.eigenvalues[j] * sp.b_hat[j] * sp.b_hat[j]).sum::<f64>();
+                    r += 1;
+                }
+                for a in 0..n_t {
+                    for b in 0..n_t {
+                        t[(r + a, r + b)] += 0.5 * (terms.k_psi[(a, b)] + terms.k_psi[(b, a)]);
+                    }
+                }
+            }
+            // Energies: T of the slow motion, U of the bodies and shapes.
+            let v = &y[l.v(i)..l.v(i) + l.n_q[i]];
+            let xi_dot = DVector::from_column_slice(&v[1..]);
+            out.kinetic_j += 0.5 * sp.inertia_kgm2 * v[0] * v[0] + 0.5 * xi_dot.dot(&(&sp.xi_mass * &xi_dot));
+            out.elastic_j += 0.5 * psi.dot(&k_psi_eta)
+                + 0.5 * (0..n_k).map(|j| g.eigenvalues[j] * eta_phi[j] * eta_phi[j]).sum::<f64>();
+            out.bore_theta[i] = *theta;
+        }
+        if let Some(t) = tangent_matrix.as_mut() {
+            // Σ k_s·g gᵀ with g the section's approach row in the fast coordinates.
+            let mut row = DVector::zeros(n_z[0] + n_z[1]);
+            for section in &contact.sections {
+                row.fill(0.0);
+                for i in 0..2 {
+                    let sp = &qs.splits[i];
+                    let n_k = model.gears[i].modes();
+                    let rows = &section.rows[i];
+                    let mut r = if i == 0 { 0 } else { n_z[0] };
+                    if sp.hub {
+                        let beta = sp.b.norm() / sp.inertia_kgm2;
+                        row[r] = (0..n_k).map(|j| sp.b_hat[j] * rows[1 + j]).sum::<f64>() - beta * rows[0];
+                        r += 1;
+                    }
+                    for m in 0..model.gears[i].shapes {
+                        row[r + m] = rows[1 + n_k + m];
+                    }
+                }
+                t.ger(section.stiffness_n_per_m, &row, &row, 1.0);
+            }
+        }
+        out.contact_j = contact.potential_j;
+        out.contact = contact;
+        Ok(Evaluation { residual, tangent: tangent_matrix, acceleration, dissipation_w: dissipation, outputs: out })
+    }
+
+    /// The fast coordinates' equilibrium at slow state y (Newton from the last solution, with
+    /// step halving where a trial leaves the contact law's range), and the forces there.
+    fn solve_fast(
+        &self,
+        qs: &QuasiStatic,
+        y: &[f64],
+        anchor: [i64; 2],
+        torques: [f64; 2],
+    ) -> Result<Evaluation, String> {
+        let n_q = y.len() / 2 - 1;
+        let positions = &y[..n_q];
+        let (evaluations, solves) = qs.counts.get();
+        qs.counts.set((evaluations, solves + 1));
+        let mut z = qs.fast.borrow().clone();
+        {
+            // The secant through the last two solves, at the projection of y on their chord.
+            let history = qs.history.borrow();
+            if let [(y0, z0), (y1, z1)] = &history[..] {
+                let (mut along, mut chord2) = (0.0, 0.0);
+                for k in 0..n_q {
+                    let d = y1[k] - y0[k];
+                    along += (positions[k] - y1[k]) * d;
+                    chord2 += d * d;
+                }
+                if chord2 > 0.0 {
+                    let t = (along / chord2).clamp(0.0, 2.0);
+                    for i in 0..2 {
+                        for k in 0..z[i].len() {
+                            z[i][k] = z1[i][k] + t * (z1[i][k] - z0[i][k]);
+                        }
+                    }
+                }
+            }
+        }
+        let mut e = match self.evaluate(qs, y, &z, anchor, torques, true) {
+            Ok(e) => e,
+            Err(_) => {
+                // The last solution is not a start here (a pose far from it): from no deformation.
+                z.iter_mut().for_each(|v| v.fill(0.0));
+                self.evaluate(qs, y, &z, anchor, torques, true)?
+            }
+        };
+        let mut history = Vec::new();
+        for _ in 0..NEWTON_ITERATIONS {
+            let k = e.tangent.take().expect("asked for");
+            let dz = k
+                .cholesky()
+                .ok_or("the quasi-static coordinates' stiffness is not positive definite")?
+                .solve(&e.residual);
+            let decrement = dz.dot(&e.residual);
+            let potential = e.outputs.elastic_j + e.outputs.contact_j;
+            history.push((decrement, potential, e.outputs.contact.sections.len()));
+            if decrement.abs() <= NEWTON_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
+                let mut history = qs.history.borrow_mut();
+                if history.len() == 2 {
+                    history.remove(0);
+                }
+                history.push((positions.to_vec(), z.clone()));
+                *qs.fast.borrow_mut() = z;
+                return Ok(e);
+            }
+            let mut t = 1.0;
+            loop {
+                let mut trial = z.clone();
+                let n0 = trial[0].len();
+                for (k, v) in trial[0].iter_mut().enumerate() {
+                    *v += t * dz[k];
+                }
+                for (k, v) in trial[1].iter_mut().enumerate() {
+                    *v += t * dz[n0 + k];
+                }
+                match self.evaluate(qs, y, &trial, anchor, torques, true) {
+                    Ok(next) => {
+                        z = trial;
+                        e = next;
+                        break;
+                    }
+                    Err(err) if t > 1.0 / 64.0 => {
+                        let _ = err;
+                        t *= 0.5;
+                    }
+                    Err(err) => return Err(err),
+                }
+            }
+        }
+        Err(format!(
+            "the quasi-static shapes found no equilibrium in {NEWTON_ITERATIONS} Newton iterations (θ = {:?} rad) {history:?}",
+            e.outputs.bore_theta
+        ))
+    }
+
+    /// ẏ of the condensed pair and the outputs there; the fast coordinates found are kept for
+    /// `unpack`. The input work is booked by the steppers on the bore's travel.
+    pub(super) fn condensed_rhs(
+        &self,
+        qs: &QuasiStatic,
+        y: &[f64],
+        anchor: [i64; 2],
+        torques: [f64; 2],
+    ) -> Result<(Vec<f64>, PmorOutputs), String> {
+        let l = self.layout();
+        let e = self.solve_fast(qs, y, anchor, torques)?;
+        let mut dy = vec![0.0; y.len()];
+        let n_q = l.n_q[0] + l.n_q[1];
+        dy[..n_q].copy_from_slice(&y[n_q..2 * n_q]);
+        dy[n_q..2 * n_q].copy_from_slice(&e.acceleration);
+        let n = y.len();
+        dy[n - 1] = e.dissipation_w;
+        Ok((dy, e.outputs))
+    }
+
+    /// The outputs at a state as it stands (its fast coordinates not re-solved).
+    pub(super) fn condensed_outputs(&self, qs: &QuasiStatic, s: &PmorState) -> Result<PmorOutputs, String> {
+        let y = self.pack(s);
+        let z = qs.fast.borrow().clone();
+        Ok(self.evaluate(qs, &y, &z, s.anchor, s.torques_nm, false)?.outputs)
+    }
+
+    /// Slow coordinates of a state into y (mean-axis angle φ and ξ per gear), and its fast
+    /// coordinates as Newton's next start.
+    pub(super) fn condensed_pack(&self, qs: &QuasiStatic, s: &PmorState, y: &mut [f64]) {
+        let l = self.layout();
+        let mut fast = qs.fast.borrow_mut();
+        qs.history.borrow_mut().clear(); // a state from outside: Newton starts from its own z
+        for i in 0..2 {
+            let g = &self.model.gears[i];
+            let sp = &qs.splits[i];
+            let n_k = g.modes();
+            let eta_phi = DVector::from_column_slice(&s.eta[i][..n_k]);
+            let eta_phi_dot = DVector::from_column_slice(&s.eta_dot[i][..n_k]);
+            let (q, v) = (l.q(i), l.v(i));
+            y[q] = s.theta[i] + sp.b.dot(&eta_phi) / sp.inertia_kgm2;
+            y[v] = s.omega[i] + sp.b.dot(&eta_phi_dot) / sp.inertia_kgm2;
+            y[q + 1..q + l.n_q[i]].copy_from_slice((sp.basis.transpose() * &eta_phi).as_slice());
+            y[v + 1..v + l.n_q[i]].copy_from_slice((sp.basis.transpose() * &eta_phi_dot).as_slice());
+            let z = &mut fast[i];
+            let mut r = 0;
+            if sp.hub {
+                z[0] = sp.b_hat.dot(&eta_phi);
+                r = 1;
+            }
+            z[r..].copy_from_slice(&s.eta[i][n_k..]);
+        }
+    }
+
+    /// The state from y and the fast coordinates of the last solve: θ, η as the FE fields have
+    /// them; ω and η̇ of the slow motion (η̇_Ψ = 0, and η̇_Φ without the hub direction's rate).
+    pub(super) fn condensed_unpack(&self, qs: &QuasiStatic, y: &[f64], s: &mut PmorState) {
+        let l = self.layout();
+        let fast = qs.fast.borrow();
+        for i in 0..2 {
+            let n_k = self.model.gears[i].modes();
+            let (eta, theta, velocity) = self.expand(qs, &l, y, i, &fast[i]);
+            s.theta[i] = theta;
+            s.eta[i].copy_from_slice(&eta);
+            s.omega[i] = velocity[0];
+            s.eta_dot[i][..n_k].copy_from_slice(&velocity[1..]);
+            s.eta_dot[i][n_k..].fill(0.0);
+        }
+    }
+
+    /// Moves the fast coordinates to their equilibrium under `torques` at the state's slow
+    /// coordinates, booking the move's work by the trapezoid rule: ½(τ_old + τ_new)·Δθ.
+    pub fn settle(&self, s: &mut PmorState, torques: [f64; 2]) -> Result<(), String> {
+        let Some(qs) = self.condensed() else {
+            s.torques_nm = torques;
+            return Ok(());
+        };
+        let before = s.theta;
+        let y = self.pack(s);
+        self.condensed_rhs(qs, &y, s.anchor, torques)?;
+        self.condensed_unpack(qs, &y, s);
+        for i in 0..2 {
+            s.input_work_j += 0.5 * (s.torques_nm[i] + torques[i]) * (s.theta[i] - before[i]);
+        }
+        s.torques_nm = torques;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Householder complement is orthonormal and orthogonal to b̂.
+    #[test]
+    fn the_slow_basis_is_the_orthonormal_complement_of_the_hub_direction() {
+        for b in [[0.3, -0.8, 0.1, 0.5], [-0.9, 0.1, 0.0, 0.2]] {
+            let b_hat = DVector::from_column_slice(&b).normalize();
+            let q = complement(&b_hat);
+            assert!((q.transpose() * &q - DMatrix::identity(3, 3)).norm() < 1e-14);
+            assert!((q.transpose() * &b_hat).norm() < 1e-14);
+        }
+    }
+}
