@@ -374,7 +374,7 @@ impl<'a> PmorDynamics<'a> {
                 self.evaluate(qs, y, &z, anchor, torques, true)?
             }
         };
-        let mut history = Vec::new();
+        let mut last_decrement = f64::NAN;
         for _ in 0..NEWTON_ITERATIONS {
             let k = e.tangent.take().expect("asked for");
             let dz = k
@@ -383,7 +383,7 @@ impl<'a> PmorDynamics<'a> {
                 .solve(&e.residual);
             let decrement = dz.dot(&e.residual);
             let potential = e.outputs.elastic_j + e.outputs.contact_j;
-            history.push((decrement, potential, e.outputs.contact.sections.len()));
+            last_decrement = decrement;
             if decrement.abs() <= NEWTON_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
                 let mut history = qs.history.borrow_mut();
                 if history.len() == 2 {
@@ -418,8 +418,9 @@ impl<'a> PmorDynamics<'a> {
             }
         }
         Err(format!(
-            "the quasi-static shapes found no equilibrium in {NEWTON_ITERATIONS} Newton iterations (θ = {:?} rad) {history:?}",
-            e.outputs.bore_theta
+            "the quasi-static shapes found no equilibrium in {NEWTON_ITERATIONS} Newton iterations (θ = {:?} rad; last decrement {last_decrement:e} J against a potential of {:e} J)",
+            e.outputs.bore_theta,
+            e.outputs.elastic_j + e.outputs.contact_j
         ))
     }
 
