@@ -81,10 +81,11 @@ impl Default for DynamicBuildOptions {
             // Velocity Verlet: example 3 at RK4's DTE (0.02 %) in half RK4's wall time, and the
             // soak's energy balance as clean as RK4's (BENCHMARKS, "Integrators").
             integrator: Integrator::Verlet,
-            // The quasi-static condensation is measured (`pmor_dynamics`,
-            // `the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step`) but not yet
-            // the FMU's default: the Python suites have not run against it (issue 24).
-            condensation: Condensation::None,
+            // The step set by the body modes and the mesh, not by the shapes against the contact
+            // or the hub: 7.3 µs instead of 1.7 µs on the default spur pair, example 3's DTE
+            // within 0.02 % of the full pair's (`pmor_dynamics`,
+            // `the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step`).
+            condensation: Condensation::QuasiStatic,
         }
     }
 }

@@ -477,10 +477,17 @@ impl<'a> PmorDynamics<'a> {
     /// Advances by `duration` in steps of `self.integrator` no longer than `max_step`.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
         self.settle(s, torques)?;
-        match self.integrator {
+        if let Some(qs) = &self.quasi_static {
+            qs.stepping.set(true);
+        }
+        let result = match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
             Integrator::Verlet => self.verlet_advance(s, torques, duration, max_step),
+        };
+        if let Some(qs) = &self.quasi_static {
+            qs.stepping.set(false);
         }
+        result
     }
 
     /// Advances by `duration` in RK4 steps no longer than `max_step`.
