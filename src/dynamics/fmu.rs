@@ -123,6 +123,10 @@ pub struct GearPairState {
     /// ExitInitializationMode for the energy balance every doStep checks.
     #[serde(default)]
     pub start_energy_j: f64,
+    /// Whether the master set max_step. If not, the default follows the instance's own
+    /// stability limit at ExitInitializationMode (a raised mesh damping ratio shortens it).
+    #[serde(default)]
+    pub max_step_set: bool,
 }
 
 /// What a run may not silently leave (issue 25): the same rules for both models, checked on the
@@ -540,6 +544,7 @@ impl Model for GearPairFmu {
             warned: [false; 2],
             pending_warnings: Vec::new(),
             start_energy_j: 0.0,
+            max_step_set: false,
         }
     }
 
@@ -555,7 +560,10 @@ impl Model for GearPairFmu {
             Var::Phi2Start => s.start.theta_2 = value,
             Var::W1Start => s.start.omega_1 = value,
             Var::W2Start => s.start.omega_2 = value,
-            Var::MaxStep => s.max_step_s = max_step(value)?,
+            Var::MaxStep => {
+                s.max_step_s = max_step(value)?;
+                s.max_step_set = true;
+            }
             Var::Inertia1 => s.params.inertia_1_kgm2 = self.inertia("inertia_1", 0, value)?,
             Var::Inertia2 => s.params.inertia_2_kgm2 = self.inertia("inertia_2", 1, value)?,
             Var::MeshDampingRatio => s.params.mesh_damping_ratio = Self::mesh_damping_ratio(value)?,
@@ -643,6 +651,13 @@ impl Model for GearPairFmu {
     }
 
     fn exit_initialization(&self, s: &mut GearPairState) -> Result<(), String> {
+        if let (Physics::PmorHertz { model, place }, false) = (&self.physics, s.max_step_set) {
+            // The default step is the build's share of its limit; with the instance's own
+            // parameters (a raised mesh damper) the same share of the instance's limit, if shorter.
+            let limit = self.pmor_stability_limit(model, place, s)?;
+            let own = (crate::dynamics::pmor::linear::STEP_SAFETY * limit * 1e7).floor() / 1e7;
+            s.max_step_s = s.max_step_s.min(own);
+        }
         self.check_stability(s)?;
         s.mech = s.start;
         if let Physics::PmorHertz { model, place } = &self.physics {

@@ -454,67 +454,74 @@ impl<'a> PmorDynamics<'a> {
                 self.evaluate(qs, y, &z, anchor, torques, true)?
             }
         };
-        let mut last_decrement = f64::NAN;
-        for _ in 0..NEWTON_ITERATIONS {
+        let keep = |z: [Vec<f64>; 2]| {
+            let mut history = qs.history.borrow_mut();
+            if history.len() == 2 {
+                history.remove(0);
+            }
+            history.push((positions.to_vec(), z.clone()));
+            *qs.fast.borrow_mut() = z;
+        };
+        let shifted = |z: &[Vec<f64>; 2], dz: &DVector<f64>, t: f64| {
+            let mut trial = z.clone();
+            let n0 = trial[0].len();
+            trial[0].iter_mut().enumerate().for_each(|(k, v)| *v += t * dz[k]);
+            trial[1].iter_mut().enumerate().for_each(|(k, v)| *v += t * dz[n0 + k]);
+            trial
+        };
+        // Newton's step and decrement ΔzᵀKΔz = Δzᵀr at an evaluation.
+        let newton = |e: &mut Evaluation| -> Result<(DVector<f64>, f64), String> {
             let k = e.tangent.take().expect("asked for");
             let dz = k
                 .cholesky()
                 .ok_or("the quasi-static coordinates' stiffness is not positive definite")?
                 .solve(&e.residual);
             let decrement = dz.dot(&e.residual);
+            Ok((dz, decrement))
+        };
+        let (mut dz, mut decrement) = newton(&mut e)?;
+        for _ in 0..NEWTON_ITERATIONS {
             let potential = e.outputs.elastic_j + e.outputs.contact_j;
-            last_decrement = decrement;
             if qs.stepping.get() && decrement.abs() <= STEP_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
                 // The last step without a new evaluation: the slow forces follow to first order.
                 self.shift_slow_forces(qs, &mut e, &dz);
-                let n0 = z[0].len();
-                for (k, v) in z[0].iter_mut().enumerate() {
-                    *v += dz[k];
-                }
-                for (k, v) in z[1].iter_mut().enumerate() {
-                    *v += dz[n0 + k];
-                }
-                let mut history = qs.history.borrow_mut();
-                if history.len() == 2 {
-                    history.remove(0);
-                }
-                history.push((positions.to_vec(), z.clone()));
-                *qs.fast.borrow_mut() = z;
+                keep(shifted(&z, &dz, 1.0));
                 return Ok(e);
             }
             if decrement.abs() <= NEWTON_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
-                let mut history = qs.history.borrow_mut();
-                if history.len() == 2 {
-                    history.remove(0);
-                }
-                history.push((positions.to_vec(), z.clone()));
-                *qs.fast.borrow_mut() = z;
+                keep(z);
                 return Ok(e);
             }
+            // The step, halved while the decrement (the residual's size in K⁻¹'s norm) does not
+            // fall: at a contact's onset the stiffness jumps and full steps can cycle, a section
+            // switching on and off. A step that leaves the contact law's range is halved too.
+            // Where no halving down to 1/64 lowers it, the lowest tried is taken.
+            let mut best: Option<(f64, [Vec<f64>; 2], Evaluation, DVector<f64>)> = None;
+            let mut failure = None;
             let mut t = 1.0;
-            loop {
-                let mut trial = z.clone();
-                let n0 = trial[0].len();
-                for (k, v) in trial[0].iter_mut().enumerate() {
-                    *v += t * dz[k];
-                }
-                for (k, v) in trial[1].iter_mut().enumerate() {
-                    *v += t * dz[n0 + k];
-                }
+            while t >= 1.0 / 64.0 {
+                let trial = shifted(&z, &dz, t);
                 match self.evaluate(qs, y, &trial, anchor, torques, true) {
-                    Ok(next) => {
-                        z = trial;
-                        e = next;
-                        break;
+                    Ok(mut next) => {
+                        let (next_dz, next_decrement) = newton(&mut next)?;
+                        let lower = next_decrement.abs() <= (1.0 - 1e-4 * t) * decrement.abs();
+                        if lower || best.as_ref().map_or(true, |b| next_decrement.abs() < b.0) {
+                            best = Some((next_decrement.abs(), trial, next, next_dz));
+                        }
+                        if lower {
+                            break;
+                        }
                     }
-                    Err(err) if t > 1.0 / 64.0 => {
-                        let _ = err;
-                        t *= 0.5;
-                    }
-                    Err(err) => return Err(err),
+                    Err(err) => failure = Some(err),
                 }
+                t *= 0.5;
             }
+            let Some((next_decrement, trial, next, next_dz)) = best else {
+                return Err(failure.unwrap_or_else(|| "no Newton step could be evaluated".into()));
+            };
+            (z, e, dz, decrement) = (trial, next, next_dz, next_decrement);
         }
+        let last_decrement = decrement;
         Err(format!(
             "the quasi-static shapes found no equilibrium in {NEWTON_ITERATIONS} Newton iterations (θ = {:?} rad; last decrement {last_decrement:e} J against a potential of {:e} J)",
             e.outputs.bore_theta,
