@@ -8,6 +8,7 @@ use super::pmor::model::PmorModel;
 use super::pmor::{PmorDynamics, PmorOutputs, PmorState};
 use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
+use crate::dynamics::pmor::quasi_static::{Condensation, GearSplit};
 use crate::fmi2::{Model, Phase};
 use crate::gear::sig;
 use crate::interface;
@@ -216,6 +217,9 @@ pub struct LoadedPair {
     /// mesh damping ratio, as bits), linearized once per set (`check_stability`).
     stability_limits: std::sync::Mutex<Vec<([u64; 3], f64)>>,
     pub validity: Validity,
+    /// PMOR-Hertz, condensed: each gear's split into slow and quasi-static coordinates at the FE
+    /// inertias (an eigen-decomposition per gear), made once rather than per call.
+    default_splits: Option<[GearSplit; 2]>,
 }
 
 /// Stability limits kept per PMOR-Hertz model for parameter sets other than the build's.
@@ -270,6 +274,12 @@ impl LoadedPair {
                 }
             }
         };
+        let default_splits = match &physics {
+            Physics::PmorHertz { model, .. } if model.condensation == Condensation::QuasiStatic => {
+                Some([GearSplit::new(&model.gears[0], 0.0)?, GearSplit::new(&model.gears[1], 0.0)?])
+            }
+            _ => None,
+        };
         Ok(LoadedPair {
             guid: file.guid,
             physics,
@@ -277,6 +287,7 @@ impl LoadedPair {
             lookup,
             stability_limits: Default::default(),
             validity,
+            default_splits,
         })
     }
 }
@@ -313,12 +324,12 @@ impl GearPairFmu {
     pub fn pmor<'a>(&'a self, model: &'a PmorModel, place: &'a PairPlacement, s: &GearPairState) -> PmorDynamics<'a> {
         let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
         let p = &s.params;
-        let mut dynamics = PmorDynamics::new(
-            model,
-            place,
-            model.damping(model.modal_damping_ratio, model.shape_damping_ratio),
-            [p.inertia_1_kgm2 - fe[0], p.inertia_2_kgm2 - fe[1]],
-        );
+        let added = [p.inertia_1_kgm2 - fe[0], p.inertia_2_kgm2 - fe[1]];
+        let damping = model.damping(model.modal_damping_ratio, model.shape_damping_ratio);
+        let mut dynamics = match &self.default_splits {
+            Some(splits) if added == [0.0; 2] => PmorDynamics::with_splits(model, place, damping, splits),
+            _ => PmorDynamics::new(model, place, damping, added),
+        };
         dynamics.mesh_damping_n_s_per_m =
             model.mesh_damper_n_s_per_m(p.mesh_damping_ratio, [p.inertia_1_kgm2, p.inertia_2_kgm2]);
         dynamics

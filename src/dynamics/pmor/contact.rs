@@ -102,6 +102,20 @@ struct Located {
     section: usize,
 }
 
+impl Located {
+    /// The same contact in another axial section (a spur pair's search does not depend on z).
+    fn in_section(&self, flank: Flank, search_section: usize, z: f64, sections: usize) -> Located {
+        let mut c = self.c;
+        c.section = search_section;
+        c.z_m = z;
+        let section = match flank {
+            Flank::Drive => search_section,
+            Flank::Coast => sections - 1 - search_section,
+        };
+        Located { c, teeth: self.teeth, section }
+    }
+}
+
 /// The contact of tooth pair j on `flank`, searched in section `search_section` (mid-plane
 /// `z`) of the pose where that flank drives.
 fn locate(
@@ -270,6 +284,7 @@ pub fn contact_loads(
     let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
     let info = &model.info;
     let theta = [poses[0].theta, poses[1].theta];
+    let spur = p.base_helix_angle_rad == 0.0;
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
     for flank in Flank::BOTH {
         let searched = place.searched_angles(flank, theta);
@@ -280,9 +295,16 @@ pub fn contact_loads(
         }
         for j in candidate_pairs(model, searched[1]) {
             let mut pair_force = 0.0;
+            // A spur pair's sections differ only in z, which its contact search does not read
+            // (no helix, no twist): one search serves them all.
+            let spur_search = spur.then(|| locate(place, flank, theta, j, 0, 0.5 * (layers[0] + layers[1]), sections));
             for s in 0..sections {
                 let z_mid = 0.5 * (layers[s] + layers[s + 1]);
-                let Some(at) = locate(place, flank, theta, j, s, z_mid, sections) else { continue };
+                let found = match &spur_search {
+                    Some(first) => first.as_ref().map(|at| at.in_section(flank, s, z_mid, sections)),
+                    None => locate(place, flank, theta, j, s, z_mid, sections),
+                };
+                let Some(at) = found else { continue };
                 let c = &at.c;
                 if c.rigid_penetration_m + reach <= 0.0 {
                     continue; // a gap the deformation cannot close (most of the coast flanks)

@@ -80,9 +80,25 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
     ) -> Result<(), String> {
+        self.verlet_advance_from(s, torques, duration, max_step, None)
+    }
+
+    /// `verlet_advance` from the right-hand side at `s` where the caller has it already (the
+    /// quasi-static coordinates' settling under new torques evaluates it).
+    pub(super) fn verlet_advance_from(
+        &self,
+        s: &mut PmorState,
+        torques: [f64; 2],
+        duration: f64,
+        max_step: f64,
+        first: Option<(Vec<f64>, super::PmorOutputs)>,
+    ) -> Result<(), String> {
         let (n, h) = super::substeps(duration, max_step);
         let mut y = self.pack(s);
-        let (mut dy, mut start) = self.rhs(&y, s.anchor, torques)?;
+        let (mut dy, mut start) = match first {
+            Some(f) => f,
+            None => self.rhs(&y, s.anchor, torques)?,
+        };
         let len = y.len();
         let l = self.layout();
         let n_q = l.n_q[0] + l.n_q[1];

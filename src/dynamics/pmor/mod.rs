@@ -165,13 +165,17 @@ impl<'a> PmorDynamics<'a> {
         damping: [Damping; 2],
         added_inertia_kgm2: [f64; 2],
     ) -> Self {
-        let (quasi_static, setup_error) = match model.condensation {
-            Condensation::None => (None, None),
-            Condensation::QuasiStatic => match QuasiStatic::new(model, added_inertia_kgm2) {
-                Ok(q) => (Some(q), None),
-                Err(e) => (None, Some(e)),
-            },
-        };
+        let mut d = Self::new_without_condensation(model, place, damping, added_inertia_kgm2);
+        d.set_condensation(model.condensation);
+        d
+    }
+
+    fn new_without_condensation(
+        model: &'a PmorModel,
+        place: &'a PairPlacement,
+        damping: [Damping; 2],
+        added_inertia_kgm2: [f64; 2],
+    ) -> Self {
         PmorDynamics {
             model,
             place,
@@ -182,9 +186,22 @@ impl<'a> PmorDynamics<'a> {
             integrator: model.integrator,
             gram_cache: Default::default(),
             terms: [0, 1].map(|i| RefCell::new(GearTerms::new(&model.gears[i]))),
-            quasi_static,
-            setup_error,
+            quasi_static: None,
+            setup_error: None,
         }
+    }
+
+    /// The condensed pair at the FE inertias with the gears' splits made before (an FMU makes
+    /// them once: `GearSplit::new` costs an eigen-decomposition per gear).
+    pub fn with_splits(
+        model: &'a PmorModel,
+        place: &'a PairPlacement,
+        damping: [Damping; 2],
+        splits: &[quasi_static::GearSplit; 2],
+    ) -> Self {
+        let mut d = PmorDynamics::new_without_condensation(model, place, damping, [0.0; 2]);
+        d.quasi_static = Some(QuasiStatic::from_splits(model, splits.clone()));
+        d
     }
 
     /// Another treatment of the stiff coordinates than the model's (`quasi_static`): the same
@@ -476,13 +493,13 @@ impl<'a> PmorDynamics<'a> {
 
     /// Advances by `duration` in steps of `self.integrator` no longer than `max_step`.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
-        self.settle(s, torques)?;
+        let first = self.settle(s, torques)?;
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(true);
         }
         let result = match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
-            Integrator::Verlet => self.verlet_advance(s, torques, duration, max_step),
+            Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first),
         };
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(false);

@@ -95,6 +95,9 @@ pub struct GearSplit {
     /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
     pub xi_mass: DMatrix<f64>,
     xi_mass_factor: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    /// Whether that mass is the identity to round-off (Φ mass-normalized: measured ≤ 1e-14 on
+    /// the example pairs), so the accelerations are the forces themselves.
+    xi_mass_is_unit: bool,
     /// The hub mode's free frequency (Hz) the choice was made on.
     pub hub_frequency_hz: f64,
 }
@@ -119,7 +122,26 @@ impl GearSplit {
         let basis = if hub { complement(&b_hat) } else { DMatrix::identity(n_k, n_k) };
         let xi_mass = basis.transpose() * &mass * &basis;
         let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
-        Ok(GearSplit { hub, b, b_hat, inertia_kgm2: inertia, basis, xi_mass, xi_mass_factor, hub_frequency_hz })
+        let n_x = xi_mass.nrows();
+        let xi_mass_is_unit = (&xi_mass - DMatrix::identity(n_x, n_x)).amax() < 1e-12;
+        Ok(GearSplit {
+            hub,
+            b,
+            b_hat,
+            inertia_kgm2: inertia,
+            basis,
+            xi_mass,
+            xi_mass_factor,
+            xi_mass_is_unit,
+            hub_frequency_hz,
+        })
+    }
+
+    /// ξ̈ = M_ξ⁻¹·f_ξ, in place.
+    fn xi_acceleration(&self, force: &mut DVector<f64>) {
+        if !self.xi_mass_is_unit {
+            self.xi_mass_factor.solve_mut(force);
+        }
     }
 
     /// Slow coordinates besides φ: n_ξ.
@@ -164,14 +186,19 @@ impl QuasiStatic {
             GearSplit::new(&dynamics_model.gears[0], added_inertia_kgm2[0])?,
             GearSplit::new(&dynamics_model.gears[1], added_inertia_kgm2[1])?,
         ];
+        Ok(Self::from_splits(dynamics_model, splits))
+    }
+
+    /// From splits made before (`GearSplit::new` costs an eigen-decomposition per gear).
+    pub fn from_splits(dynamics_model: &super::model::PmorModel, splits: [GearSplit; 2]) -> Self {
         let fast = [0, 1].map(|i| vec![0.0; splits[i].fast_size(dynamics_model.gears[i].shapes)]);
-        Ok(QuasiStatic {
+        QuasiStatic {
             splits,
             fast: RefCell::new(fast),
             history: RefCell::new(Vec::with_capacity(2)),
             counts: Default::default(),
             stepping: Default::default(),
-        })
+        }
     }
 }
 
@@ -294,8 +321,8 @@ impl<'a> PmorDynamics<'a> {
             let to_xi = |f_t: f64, f_p: &DVector<f64>| sp.basis.transpose() * (f_p - &sp.b * (f_t / sp.inertia_kgm2));
             let q = l.q(i);
             acceleration[q] = (f_theta - d_theta) / sp.inertia_kgm2;
-            let xi_force = to_xi(f_theta - d_theta, &(&f_phi - &d_phi));
-            let xi_acc = sp.xi_mass_factor.solve(&xi_force);
+            let mut xi_acc = to_xi(f_theta - d_theta, &(&f_phi - &d_phi));
+            sp.xi_acceleration(&mut xi_acc);
             acceleration[q + 1..q + l.n_q[i]].copy_from_slice(xi_acc.as_slice());
             out.damping_force[q] = d_theta;
             out.damping_force[q + 1..q + l.n_q[i]].copy_from_slice(to_xi(d_theta, &d_phi).as_slice());
@@ -404,8 +431,8 @@ impl<'a> PmorDynamics<'a> {
                 e.outputs.bore_theta[i] -= sp.b.norm() / sp.inertia_kgm2 * dz[z_off];
             }
             e.acceleration[q] += f_theta / sp.inertia_kgm2;
-            let xi_force = sp.basis.transpose() * (f_phi - &sp.b * (f_theta / sp.inertia_kgm2));
-            let xi_acc = sp.xi_mass_factor.solve(&xi_force);
+            let mut xi_acc = sp.basis.transpose() * (f_phi - &sp.b * (f_theta / sp.inertia_kgm2));
+            sp.xi_acceleration(&mut xi_acc);
             for (a, d) in e.acceleration[q + 1..q + l.n_q[i]].iter_mut().zip(xi_acc.iter()) {
                 *a += d;
             }
@@ -601,20 +628,21 @@ impl<'a> PmorDynamics<'a> {
 
     /// Moves the fast coordinates to their equilibrium under `torques` at the state's slow
     /// coordinates, booking the move's work by the trapezoid rule: ½(τ_old + τ_new)·Δθ.
-    pub fn settle(&self, s: &mut PmorState, torques: [f64; 2]) -> Result<(), String> {
+    /// Returns the right-hand side there (condensed), a time stepper's first.
+    pub fn settle(&self, s: &mut PmorState, torques: [f64; 2]) -> Result<Option<(Vec<f64>, PmorOutputs)>, String> {
         let Some(qs) = self.condensed() else {
             s.torques_nm = torques;
-            return Ok(());
+            return Ok(None);
         };
         let before = s.theta;
         let y = self.pack(s);
-        self.condensed_rhs(qs, &y, s.anchor, torques)?;
+        let first = self.condensed_rhs(qs, &y, s.anchor, torques)?;
         self.condensed_unpack(qs, &y, s);
         for i in 0..2 {
             s.input_work_j += 0.5 * (s.torques_nm[i] + torques[i]) * (s.theta[i] - before[i]);
         }
         s.torques_nm = torques;
-        Ok(())
+        Ok(Some(first))
     }
 }
 
