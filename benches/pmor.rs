@@ -76,8 +76,7 @@ fn main() {
     let counts_before = dynamics.condensed().unwrap().counts.get();
     let (pmor_wall, loaded) = example_3(&dynamics, verlet_max_step, 3);
     let counts_after = dynamics.condensed().unwrap().counts.get();
-    let evaluations_per_solve =
-        (counts_after.0 - counts_before.0) as f64 / (counts_after.1 - counts_before.1) as f64;
+    let evaluations_per_solve = (counts_after.0 - counts_before.0) as f64 / (counts_after.1 - counts_before.1) as f64;
     let (rk4_wall, rk4_end) = example_3(&rk4, rk4_max_step, 3);
     let (full_wall, full_end) = example_3(&full, full_max_step, 3);
 

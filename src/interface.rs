@@ -7,6 +7,8 @@ use serde::Deserialize;
 #[serde(untagged)]
 pub enum Start {
     Value(f64),
+    /// A Boolean's start value.
+    Flag(bool),
     /// "model": taken from the pair's model data when the FMU is built.
     FromModel(String),
 }

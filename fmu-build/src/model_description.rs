@@ -94,6 +94,7 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
         let start = match &v.start {
             None => String::new(),
             Some(Start::Value(s)) => format!(r#" start="{s:?}""#),
+            Some(Start::Flag(b)) => format!(r#" start="{b}""#),
             Some(Start::FromModel(tag)) if tag == "model" => {
                 let value = facts
                     .model_starts

@@ -39,10 +39,11 @@ pub enum Var {
     Inertia1,
     Inertia2,
     MeshDampingRatio,
+    StartAtEquilibrium,
 }
 
 impl Var {
-    pub const ALL: [Var; 19] = [
+    pub const ALL: [Var; 20] = [
         Var::Tau1,
         Var::Tau2,
         Var::Phi1,
@@ -62,6 +63,7 @@ impl Var {
         Var::Inertia1,
         Var::Inertia2,
         Var::MeshDampingRatio,
+        Var::StartAtEquilibrium,
     ];
 
     pub fn name(self) -> &'static str {
@@ -85,6 +87,7 @@ impl Var {
             Var::Inertia1 => "inertia_1",
             Var::Inertia2 => "inertia_2",
             Var::MeshDampingRatio => "mesh_damping_ratio",
+            Var::StartAtEquilibrium => "start_at_equilibrium",
         }
     }
 
@@ -99,6 +102,7 @@ impl Var {
                 | Var::Inertia1
                 | Var::Inertia2
                 | Var::MeshDampingRatio
+                | Var::StartAtEquilibrium
         )
     }
 }
@@ -120,14 +124,17 @@ pub struct GearPairState {
     /// Warnings of the last step, for the FMI layer to log (`Model::take_warnings`).
     #[serde(default)]
     pub pending_warnings: Vec<String>,
-    /// The PMOR-Hertz pair's stored energy at its start state (J), found once at
-    /// ExitInitializationMode for the energy balance every doStep checks.
+    /// The pair's stored energy at its start state (J), found once at ExitInitializationMode
+    /// for the energy balance every doStep checks.
     #[serde(default)]
     pub start_energy_j: f64,
     /// Whether the master set max_step. If not, the default follows the instance's own
     /// stability limit at ExitInitializationMode (a raised mesh damping ratio shortens it).
     #[serde(default)]
     pub max_step_set: bool,
+    /// Start from the static equilibrium under τ₁ (`start_at_equilibrium`).
+    #[serde(default)]
+    pub start_at_equilibrium: bool,
 }
 
 /// What a run may not silently leave (issue 25): the same rules for both models, checked on the
@@ -556,6 +563,7 @@ impl Model for GearPairFmu {
             pending_warnings: Vec::new(),
             start_energy_j: 0.0,
             max_step_set: false,
+            start_at_equilibrium: false,
         }
     }
 
@@ -578,6 +586,9 @@ impl Model for GearPairFmu {
             Var::Inertia1 => s.params.inertia_1_kgm2 = self.inertia("inertia_1", 0, value)?,
             Var::Inertia2 => s.params.inertia_2_kgm2 = self.inertia("inertia_2", 1, value)?,
             Var::MeshDampingRatio => s.params.mesh_damping_ratio = Self::mesh_damping_ratio(value)?,
+            Var::StartAtEquilibrium => {
+                return Err(format!("value reference {vr} (start_at_equilibrium) is a Boolean, not a Real"))
+            }
             other => return Err(format!("{} is an output and cannot be set", other.name())),
         }
         // Until initialization ends the mechanical state follows the start values.
@@ -644,6 +655,9 @@ impl Model for GearPairFmu {
             Var::Inertia2 => s.params.inertia_2_kgm2,
             Var::MeshDampingRatio => s.params.mesh_damping_ratio,
             Var::ContactPairs => return Err(format!("value reference {vr} (contact_pairs) is an Integer, not a Real")),
+            Var::StartAtEquilibrium => {
+                return Err(format!("value reference {vr} (start_at_equilibrium) is a Boolean, not a Real"))
+            }
         })
     }
 
@@ -661,6 +675,26 @@ impl Model for GearPairFmu {
         }
     }
 
+    fn get_boolean(&self, s: &GearPairState, vr: u32) -> Result<bool, String> {
+        match self.var(vr)? {
+            Var::StartAtEquilibrium => Ok(s.start_at_equilibrium),
+            other => Err(format!("value reference {vr} ({}) is not a Boolean", other.name())),
+        }
+    }
+
+    fn set_boolean(&self, s: &mut GearPairState, vr: u32, value: bool, phase: Phase) -> Result<(), String> {
+        match self.var(vr)? {
+            Var::StartAtEquilibrium if matches!(phase, Phase::Instantiated | Phase::InitializationMode) => {
+                s.start_at_equilibrium = value;
+                Ok(())
+            }
+            Var::StartAtEquilibrium => {
+                Err("start_at_equilibrium is a fixed parameter: it can be set only before initialization ends".into())
+            }
+            other => Err(format!("value reference {vr} ({}) is not a Boolean", other.name())),
+        }
+    }
+
     fn exit_initialization(&self, s: &mut GearPairState) -> Result<(), String> {
         if let (Physics::PmorHertz { model, place }, false) = (&self.physics, s.max_step_set) {
             // The default step is the build's share of its limit; with the instance's own
@@ -671,13 +705,24 @@ impl Model for GearPairFmu {
         }
         self.check_stability(s)?;
         s.mech = s.start;
+        if let Physics::Lumped(mesh) = &self.physics {
+            let model = LumpedModel::new(mesh, s.params);
+            if s.start_at_equilibrium {
+                s.mech = lumped_equilibrium(&model, s.start, s.torques_nm[0])?;
+            }
+            s.start_energy_j = model.kinetic_energy(&s.mech) + model.mesh_state(&s.mech).potential_j;
+        }
         if let Physics::PmorHertz { model, place } = &self.physics {
             let dynamics = self.pmor(model, place, s);
-            let start = dynamics.start_state(
-                [s.start.theta_1, s.start.theta_2],
-                [s.start.omega_1, s.start.omega_2],
-                s.torques_nm,
-            )?;
+            let start = if s.start_at_equilibrium {
+                pmor_equilibrium(&dynamics, s)?
+            } else {
+                dynamics.start_state(
+                    [s.start.theta_1, s.start.theta_2],
+                    [s.start.omega_1, s.start.omega_2],
+                    s.torques_nm,
+                )?
+            };
             // The start must be a state the model can evaluate (e.g. no coast-flank contact).
             s.start_energy_j = dynamics.outputs(&start)?.total_energy_j();
             s.pmor = Some(start);
@@ -713,6 +758,7 @@ impl Model for GearPairFmu {
         let l = |m: &LumpedState| [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j];
         finite("the start values", &l(&s.start))?;
         finite("the lumped state", &l(&s.mech))?;
+        finite("the start energy", &[s.start_energy_j])?;
         match (&self.physics, &s.pmor) {
             (Physics::Lumped(_), Some(_)) => Err("a PMOR-Hertz state cannot be restored into the lumped model".into()),
             (Physics::Lumped(_), None) | (Physics::PmorHertz { .. }, None) => Ok(()),
@@ -766,10 +812,8 @@ impl Model for GearPairFmu {
             ));
         }
         let stored = |x: &LumpedState| model.kinetic_energy(x) + model.mesh_state(x).potential_j;
-        energy_balance(
-            [stored(&s.start), stored(&next)],
-            [next.input_work_j - s.start.input_work_j, next.dissipated_j - s.start.dissipated_j],
-        )?;
+        // The work integrals start at zero at ExitInitializationMode, where E₀ was stored.
+        energy_balance([s.start_energy_j, stored(&next)], [next.input_work_j, next.dissipated_j])?;
         s.mech = next;
         let warnings = self.validity.check(model.mesh_state(&next).force_n, &mut s.warned);
         s.pending_warnings.extend(warnings);
@@ -832,4 +876,70 @@ mod tests {
         assert_eq!(both.len(), 2);
         assert!(both[1].contains("lower the load") && !both[1].contains("rebuild"), "{}", both[1]);
     }
+}
+
+/// The reduced pair at rest in its static equilibrium under τ₁ with gear 2 held at its start
+/// angle (`linear::static_equilibrium`: the mesh, the bodies and the shapes deflected, gear 2's
+/// reaction torque found), then given the start speeds (`start_at_equilibrium`). Its
+/// quasi-static coordinates are in equilibrium with τ₁ and that reaction; the first doStep
+/// moves them to the master's τ₂ and books the work.
+fn pmor_equilibrium(dynamics: &PmorDynamics, s: &GearPairState) -> Result<PmorState, String> {
+    let model = dynamics.model;
+    let torque_1 = s.torques_nm[0];
+    // As `linear::stability_limit_under_load`: a tenth of the STE of 10 N/(mm·µm), from the
+    // light side, inside the contact law's range.
+    let guess = torque_1 / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
+    let (mut state, reaction) =
+        crate::dynamics::pmor::linear::static_equilibrium(dynamics, s.start.theta_2, torque_1, guess)
+            .map_err(|e| format!("start_at_equilibrium: {e}"))?;
+    state.omega = [s.start.omega_1, s.start.omega_2];
+    state.torques_nm = [torque_1, reaction];
+    Ok(state)
+}
+
+/// The lumped pair at rest in its static equilibrium under τ₁ with gear 2 held at its start
+/// angle: θ₁ such that τ₁ = r_b1·(F − F_roll) (the mesh law's force and its roll force), by
+/// Newton on the law's tangent stiffness from the tabulated static deflection; then given the
+/// start speeds. τ₁ = 0 leaves the flanks just touching.
+fn lumped_equilibrium(model: &LumpedModel, start: LumpedState, torque_1: f64) -> Result<LumpedState, String> {
+    let m = model.mesh;
+    let (r1, r2) = (m.base_radius_1_m, m.base_radius_2_m);
+    let force = torque_1 / r1;
+    let mut s = LumpedState { omega_1: 0.0, omega_2: 0.0, ..start };
+    let roll = |s: &LumpedState| r1 * s.theta_1 + m.roll_offset_m;
+    let set_delta = |s: &mut LumpedState, delta: f64| s.theta_1 = (r2 * s.theta_2 + delta) / r1;
+    // The tabulated deflection at the start's roll position: a start within the law's accuracy.
+    let delta = if force > 0.0 {
+        m.drive.static_deflection(force, roll(&s))
+    } else if force < 0.0 {
+        -(m.backlash_m + m.coast.static_deflection(-force, roll(&s)))
+    } else {
+        0.0
+    };
+    set_delta(&mut s, delta);
+    if force != 0.0 {
+        let mut converged = false;
+        for _ in 0..50 {
+            let mesh = model.mesh_state(&s);
+            let residual = torque_1 - r1 * (mesh.elastic_force_n - mesh.roll_force_n);
+            if residual.abs() <= 1e-10 * torque_1.abs() {
+                converged = true;
+                break;
+            }
+            if !(mesh.stiffness_n_per_m > 0.0) {
+                return Err(format!(
+                    "start_at_equilibrium: the mesh carries no load at δ = {:e} m",
+                    mesh.transmission_error_m
+                ));
+            }
+            // d(residual)/dδ = −r_b1·k (the roll force's slope left out: Newton's matrix only).
+            set_delta(&mut s, mesh.transmission_error_m + residual / (r1 * mesh.stiffness_n_per_m));
+        }
+        if !converged {
+            return Err(format!("start_at_equilibrium: no static equilibrium found under τ₁ = {torque_1} N·m"));
+        }
+    }
+    s.omega_1 = start.omega_1;
+    s.omega_2 = start.omega_2;
+    Ok(s)
 }

@@ -216,7 +216,7 @@ pub extern "C" fn fmi2GetInteger(
     })
 }
 
-/// Booleans and strings: this interface has none, so any value reference is unknown.
+/// Strings: this interface has none, so any value reference is unknown.
 fn no_such_variables(i: &mut Inst, function: &str, vr: *const fmi2ValueReference, n: usize) -> fmi2Status {
     match slice(vr, n) {
         None => i.fail(function, "vr is NULL"),
@@ -232,9 +232,12 @@ pub extern "C" fn fmi2GetBoolean(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     n: usize,
-    _v: *mut fmi2Boolean,
+    value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2GetBoolean", allowed::GET, |i| no_such_variables(i, "fmi2GetBoolean", vr, n))
+    guard(c, "fmi2GetBoolean", allowed::GET, |i| match (slice(vr, n), slice_mut(value, n)) {
+        (Some(vr), Some(value)) => i.get_booleans(vr, value),
+        _ => i.fail("fmi2GetBoolean", "vr or value is NULL"),
+    })
 }
 
 #[no_mangle]
@@ -280,9 +283,12 @@ pub extern "C" fn fmi2SetBoolean(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     n: usize,
-    _v: *const fmi2Boolean,
+    value: *const fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2SetBoolean", allowed::SET, |i| no_such_variables(i, "fmi2SetBoolean", vr, n))
+    guard(c, "fmi2SetBoolean", allowed::SET, |i| match (slice(vr, n), slice(value, n)) {
+        (Some(vr), Some(value)) => i.set_booleans(vr, value),
+        _ => i.fail("fmi2SetBoolean", "vr or value is NULL"),
+    })
 }
 
 #[no_mangle]

@@ -257,6 +257,28 @@ impl<M: Model> Instance<M> {
         OK
     }
 
+    pub fn get_booleans(&mut self, vrs: &[u32], values: &mut [i32]) -> Status {
+        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
+            match self.model.get_boolean(&self.state, vr) {
+                Ok(v) => *value = v as i32,
+                Err(e) => return self.fail("fmi2GetBoolean", &e),
+            }
+        }
+        OK
+    }
+
+    pub fn set_booleans(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        // Check everything before changing anything: a refused call changes nothing.
+        let mut trial = self.state.clone();
+        for (&vr, &value) in vrs.iter().zip(values) {
+            if let Err(e) = self.model.set_boolean(&mut trial, vr, value != 0, self.phase) {
+                return self.fail("fmi2SetBoolean", &e);
+            }
+        }
+        self.state = trial;
+        OK
+    }
+
     pub fn snapshot(&self) -> Snapshot<M::State> {
         Snapshot { state: self.state.clone(), time: self.time, stop_time: self.stop_time, phase: self.phase }
     }

@@ -38,6 +38,8 @@ pub trait Model: Sized + Send + 'static {
     fn set_real(&self, state: &mut Self::State, vr: u32, value: f64, phase: Phase) -> Result<(), String>;
     fn get_real(&self, state: &Self::State, vr: u32) -> Result<f64, String>;
     fn get_integer(&self, state: &Self::State, vr: u32) -> Result<i32, String>;
+    fn get_boolean(&self, state: &Self::State, vr: u32) -> Result<bool, String>;
+    fn set_boolean(&self, state: &mut Self::State, vr: u32, value: bool, phase: Phase) -> Result<(), String>;
     /// Applies the start values and computes initial outputs (fmi2ExitInitializationMode).
     fn exit_initialization(&self, state: &mut Self::State) -> Result<(), String>;
     /// Refuses, before any work, a step of size h (finite, > 0) that cannot be done in bounded
