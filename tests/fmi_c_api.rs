@@ -196,7 +196,7 @@ fn bad_arguments_are_refused_with_a_log_line() {
     fresh(c);
     let mut b = 0;
     assert_eq!(fmi2GetBoolean(c, &0, 1, &mut b), ERR);
-    assert_logged("bad-args", "fmi2GetBoolean: unknown value reference 0");
+    assert_logged("bad-args", "fmi2GetBoolean: value reference 0 (tau_1) is not a Boolean");
     fresh(c);
     let category = CString::new("logNoSuchThing").unwrap();
     assert_eq!(fmi2SetDebugLogging(c, 1, 1, &category.as_ptr()), ERR);
