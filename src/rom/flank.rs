@@ -126,17 +126,28 @@ impl FlankGrid {
     /// ∓1/Δr (zero where the radius is clamped to the flank's extent, as the shares are constant
     /// there).
     pub fn point_shares_and_slopes(&self, tooth: usize, r: f64, section: usize) -> Option<(Shares, Shares)> {
+        self.point_stencil(tooth, r, section).map(|(shares, slopes)| (shares.to_vec(), slopes.to_vec()))
+    }
+
+    /// [`FlankGrid::point_shares_and_slopes`] without allocation: the four nodes, as arrays (the
+    /// dynamics' contact reads them at every loaded section at every right-hand side).
+    pub fn point_stencil(
+        &self,
+        tooth: usize,
+        r: f64,
+        section: usize,
+    ) -> Option<([(usize, f64); 4], [(usize, f64); 4])> {
         let slot = self.tooth_slot(tooth)?;
         let rows = &self.row_radius_m;
         let (row, t) = self.row_of(r);
         let inside = r > rows[0] && r < rows[rows.len() - 1];
         let slope = if inside { 1.0 / (rows[row + 1] - rows[row]) } else { 0.0 };
-        let (mut shares, mut slopes) = (Vec::with_capacity(4), Vec::with_capacity(4));
-        for (dr, wr, sr) in [(0, 1.0 - t, -slope), (1, t, slope)] {
+        let (mut shares, mut slopes) = ([(0, 0.0); 4], [(0, 0.0); 4]);
+        for (n, (dr, wr, sr)) in [(0, 1.0 - t, -slope), (1, t, slope)].into_iter().enumerate() {
             for dl in 0..2 {
                 let node = self.index(slot, row + dr, section + dl);
-                shares.push((node, 0.5 * wr));
-                slopes.push((node, 0.5 * sr));
+                shares[2 * n + dl] = (node, 0.5 * wr);
+                slopes[2 * n + dl] = (node, 0.5 * sr);
             }
         }
         Some((shares, slopes))
@@ -169,12 +180,19 @@ impl FlankGrid {
         let first = self.row_of(r - dr).0;
         let span = self.row_of(r + dr).0 + 2 - first;
         let mut row_weight = vec![0.0; span];
+        // The nodes sin²(kπ/(P+1)) and abscissae cos(kπ/(P+1)), once per process: the contact
+        // calls this for every loaded section and gear at every right-hand side.
+        static QUADRATURE: std::sync::OnceLock<[(f64, f64); POINTS]> = std::sync::OnceLock::new();
+        let quadrature = QUADRATURE.get_or_init(|| {
+            std::array::from_fn(|i| {
+                let angle = std::f64::consts::PI * (i + 1) as f64 / (POINTS + 1) as f64;
+                (angle.sin().powi(2), angle.cos())
+            })
+        });
         let mut total = 0.0;
-        for k in 1..=POINTS {
-            let angle = std::f64::consts::PI * k as f64 / (POINTS + 1) as f64;
-            let w = angle.sin().powi(2);
+        for &(w, abscissa) in quadrature {
             total += w;
-            let (row, t) = self.row_of(r + dr * angle.cos());
+            let (row, t) = self.row_of(r + dr * abscissa);
             row_weight[row - first] += w * (1.0 - t);
             row_weight[row + 1 - first] += w * t;
         }

@@ -28,7 +28,6 @@
 use super::equations::Stencil;
 use super::model::PmorModel;
 use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
-use crate::rom::flank::Shares;
 
 /// Angle step of the central differences ∂α/∂θ at tip corners (rad).
 const ANGLE_STEP: f64 = 1e-7;
@@ -90,7 +89,7 @@ struct ElasticApproach {
     per_angle_m: f64,
     /// The reference tooth the point lies on, its shares and normal (for the loads).
     tooth: usize,
-    shares: Shares,
+    shares: [(usize, f64); 4],
     normal: [f64; 3],
 }
 
@@ -145,7 +144,7 @@ fn elastic_approach(
     let grid = &g.flank(flank).grid;
     let z = g.teeth as i64;
     let tooth = (at.teeth[i] as i64 + pose.anchor).rem_euclid(z) as usize;
-    let (shares, slopes) = grid.point_shares_and_slopes(tooth, at.c.radius_m[i], at.section).ok_or_else(|| {
+    let (shares, slopes) = grid.point_stencil(tooth, at.c.radius_m[i], at.section).ok_or_else(|| {
         format!("contact on reference tooth {tooth} of gear {} ({flank:?} flank): outside the stored flank rows", i + 1)
     })?;
     // n = m/|m| with m = Σ w·nₖ; dn/dr = (m' − n(n·m'))/|m|.
@@ -341,7 +340,7 @@ pub fn contact_loads(
                                 .ok_or("band outside the stored flank")?,
                             None,
                         ),
-                        Loading::Point => (e[i].shares.clone(), Some(e[i].normal)),
+                        Loading::Point => (e[i].shares.to_vec(), Some(e[i].normal)),
                     };
                     for &(k, w) in &band {
                         g.basis_row(flank, &poses[i].stencil, k, normal.unwrap_or(grid.nodes[k].1), &mut tmp[i]);
