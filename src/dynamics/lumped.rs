@@ -278,7 +278,7 @@ impl<'a> LumpedModel<'a> {
 
     /// Advances the state over `duration` in equal RK4 sub-steps no longer than `max_step`.
     pub fn advance(&self, s: &mut LumpedState, torques: [f64; 2], duration: f64, max_step: f64) {
-        let n = (duration / max_step).ceil().max(1.0) as usize;
+        let n = super::substep_count(duration, max_step);
         let h = duration / n as f64;
         for _ in 0..n {
             *s = self.rk4_step(s, torques, h);

@@ -525,7 +525,7 @@ impl<'a> PmorDynamics<'a> {
 
 /// `duration` split into the fewest equal sub-steps no longer than `max_step`: (count, length).
 fn substeps(duration: f64, max_step: f64) -> (usize, f64) {
-    let n = (duration / max_step).ceil().max(1.0) as usize;
+    let n = crate::dynamics::substep_count(duration, max_step);
     (n, duration / n as f64)
 }
 
