@@ -1188,7 +1188,8 @@ fn pmor_hertz_raised_damping_is_checked_against_its_own_step_limit() {
 }
 
 /// Issue 24, item 5: `start_at_equilibrium` (evidence: a static equilibrium is a fixed point of
-/// the flow). Both gears at rest, balanced torques from t = 0 (τ₁ = 185 N·m on gear 1,
+/// the flow). Both gears at rest, balanced torques from t = 0 (τ₁ = ±185 N·m on gear 1: drive
+/// and, reversed, the coast flanks across the backlash;
 /// τ₂ = −τ₁·r_b2/r_b1 on gear 2): from the equilibrium the pair stays put — the DTE moves by
 /// less than 1e-4 of its static value over 2 ms (nothing rolls) and the mesh force is τ₁/r_b1
 /// within 5e-4 (measured 9e-7 lumped; 7.6e-5 PMOR-Hertz, whose torque balance also holds the
@@ -1199,12 +1200,13 @@ fn pmor_hertz_raised_damping_is_checked_against_its_own_step_limit() {
 /// initialization) and is read back.
 #[test]
 fn start_at_equilibrium_starts_at_rest_under_load() {
-    let torque_1 = 185.0;
     let lumped = resources().clone();
     let pmor = pmor_resources().clone();
-    for (kind, (dir, guid)) in [("lumped", lumped), ("pmor", pmor)] {
+    for ((kind, (dir, guid)), torque_1) in
+        [("lumped", lumped), ("pmor", pmor)].into_iter().flat_map(|c| [(c.clone(), 185.0), (c, -185.0)])
+    {
         let run = |equilibrium: bool| -> (f64, f64, f64) {
-            let name = format!("equilibrium-{kind}-{equilibrium}");
+            let name = format!("equilibrium-{kind}-{torque_1}-{equilibrium}");
             let c = instantiate_at(&name, &dir, &guid);
             assert!(!c.is_null(), "{:?}", logs(&name));
             assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
@@ -1234,15 +1236,15 @@ fn start_at_equilibrium_starts_at_rest_under_load() {
         let (static_dte, swing, force_error) = run(true);
         let (_, swing_cold, _) = run(false);
         println!(
-            "{kind}: from the equilibrium DTE {:.4} µm, swing {:.2e} µm, mesh force within {force_error:.1e} of τ₁/r_b1; from the undeformed pair the swing is {:.3} µm",
+            "{kind}, τ₁ = {torque_1} N·m: from the equilibrium DTE {:.4} µm, swing {:.2e} µm, mesh force within {force_error:.1e} of τ₁/r_b1; from the undeformed pair the swing is {:.3} µm",
             static_dte * 1e6,
             swing * 1e6,
             swing_cold * 1e6
         );
-        assert!(static_dte > 0.0);
-        assert!(swing < 1e-4 * static_dte, "{kind}: the equilibrium must be a fixed point");
+        assert!(static_dte * torque_1 > 0.0, "the drive flanks carry a positive torque, the coast flanks a negative");
+        assert!(swing < 1e-4 * static_dte.abs(), "{kind}: the equilibrium must be a fixed point");
         assert!(force_error < 5e-4, "{kind}: the mesh must carry τ₁");
-        assert!(swing_cold > 0.5 * static_dte, "{kind}: from rest undeformed the load strikes the teeth");
+        assert!(swing_cold > 0.5 * static_dte.abs(), "{kind}: from rest undeformed the load strikes the teeth");
     }
 }
 

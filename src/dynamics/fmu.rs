@@ -701,6 +701,12 @@ impl Model for GearPairFmu {
             // parameters (a raised mesh damper) the same share of the instance's limit, if shorter.
             let limit = self.pmor_stability_limit(model, place, s)?;
             let own = (crate::dynamics::pmor::linear::STEP_SAFETY * limit * 1e7).floor() / 1e7;
+            if !(own > 0.0) {
+                return Err(format!(
+                    "with these parameters (inertias {:e} / {:e} kg·m², mesh damping ratio {}) the integrator's stability limit is {limit:e} s: below 0.2 µs, no step is practical; lower mesh_damping_ratio",
+                    s.params.inertia_1_kgm2, s.params.inertia_2_kgm2, s.params.mesh_damping_ratio
+                ));
+            }
             s.max_step_s = s.max_step_s.min(own);
         }
         self.check_stability(s)?;
@@ -888,7 +894,9 @@ fn pmor_equilibrium(dynamics: &PmorDynamics, s: &GearPairState) -> Result<PmorSt
     let torque_1 = s.torques_nm[0];
     // As `linear::stability_limit_under_load`: a tenth of the STE of 10 N/(mm·µm), from the
     // light side, inside the contact law's range.
-    let guess = torque_1 / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
+    let light = torque_1 / model.pair.gear1.base_radius_m / (1e11 * model.pair.face_width_m);
+    // A reversed torque rests on the coast flanks, across the backlash.
+    let guess = if torque_1 < 0.0 { -model.pair.backlash_loa_m + light } else { light };
     let (mut state, reaction) =
         crate::dynamics::pmor::linear::static_equilibrium(dynamics, s.start.theta_2, torque_1, guess)
             .map_err(|e| format!("start_at_equilibrium: {e}"))?;

@@ -140,7 +140,11 @@ impl<'a> PmorDynamics<'a> {
             self.reanchor(s);
             if s.anchor != anchor {
                 y = self.pack(s);
+                let before = start.bore_theta;
                 (dy, start) = self.rhs(&y, s.anchor, torques)?;
+                // A condensed pair's new solve may move the bore by a Newton step: its work.
+                y[len - 2] +=
+                    torques[0] * (start.bore_theta[0] - before[0]) + torques[1] * (start.bore_theta[1] - before[1]);
             }
         }
         Ok(())

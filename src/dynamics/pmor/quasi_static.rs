@@ -476,9 +476,16 @@ impl<'a> PmorDynamics<'a> {
         let mut e = match self.evaluate(qs, y, &z, anchor, torques, true) {
             Ok(e) => e,
             Err(_) => {
-                // The last solution is not a start here (a pose far from it): from no deformation.
-                z.iter_mut().for_each(|v| v.fill(0.0));
-                self.evaluate(qs, y, &z, anchor, torques, true)?
+                // The secant's extrapolation left the contact law's range: from the last
+                // solution itself, and failing that (a pose far from it) from no deformation.
+                z = qs.fast.borrow().clone();
+                match self.evaluate(qs, y, &z, anchor, torques, true) {
+                    Ok(e) => e,
+                    Err(_) => {
+                        z.iter_mut().for_each(|v| v.fill(0.0));
+                        self.evaluate(qs, y, &z, anchor, torques, true)?
+                    }
+                }
             }
         };
         let keep = |z: [Vec<f64>; 2]| {
