@@ -146,8 +146,10 @@ class GearPairRunner:
         model = read_model_description(fmu_path)
         self.vr = {v.name: v.valueReference for v in model.modelVariables}
         self.parameter_names = [v.name for v in model.modelVariables if v.causality == "parameter"]
+        # The Real parameters (inertias, damping, …): what a sweep sets; a Boolean's start is
+        # "true"/"false".
         start_values = {v.name: float(v.start) for v in model.modelVariables
-                        if v.causality == "parameter" and v.start is not None}
+                        if v.causality == "parameter" and v.type == "Real" and v.start is not None}
         self.log = FmuLog()
         self.fmu = FMU2Slave(guid=model.guid, unzipDirectory=unzip_dir,
                              modelIdentifier=model.coSimulation.modelIdentifier, instanceName=instance_name)
