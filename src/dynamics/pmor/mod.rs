@@ -219,14 +219,11 @@ impl<'a> PmorDynamics<'a> {
     /// The same pair (damping, inertias, loading, integrator) with another mesh damper (N·s/m):
     /// what the linearizations that vary the damper start from.
     pub fn with_mesh_damper(&self, mesh_damping_n_s_per_m: f64) -> PmorDynamics<'a> {
-        let mut d = PmorDynamics::new(self.model, self.place, self.damping, self.added_inertia_kgm2);
-        if self.quasi_static.is_some() != d.quasi_static.is_some() {
-            d.set_condensation(if self.quasi_static.is_some() {
-                Condensation::QuasiStatic
-            } else {
-                Condensation::None
-            });
-        }
+        // The same treatment of the stiff coordinates, its splits copied rather than made again.
+        let mut d =
+            PmorDynamics::new_without_condensation(self.model, self.place, self.damping, self.added_inertia_kgm2);
+        d.quasi_static = self.quasi_static.as_ref().map(|q| QuasiStatic::from_splits(self.model, q.splits.clone()));
+        d.setup_error = self.setup_error.clone();
         d.loading = self.loading;
         d.integrator = self.integrator;
         d.mesh_damping_n_s_per_m = mesh_damping_n_s_per_m;

@@ -90,6 +90,8 @@ pub struct GearSplit {
     pub b_hat: DVector<f64>,
     /// J (kg·m²): the FE body's polar inertia plus the added.
     pub inertia_kgm2: f64,
+    /// β = |b|/J: the bore's turn per unit of η_b (θ = φ − β·η_b).
+    pub beta: f64,
     /// Q (n_k × n_ξ): orthonormal columns, the complement of b̂ (or the identity).
     pub basis: DMatrix<f64>,
     /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
@@ -129,6 +131,7 @@ impl GearSplit {
             b,
             b_hat,
             inertia_kgm2: inertia,
+            beta: b_norm / inertia,
             basis,
             xi_mass,
             xi_mass_factor,
@@ -327,7 +330,7 @@ impl<'a> PmorDynamics<'a> {
             out.damping_force[q] = d_theta;
             out.damping_force[q + 1..q + l.n_q[i]].copy_from_slice(to_xi(d_theta, &d_phi).as_slice());
             // The fast coordinates' residual: b̂ᵀf_Φ − β·f_θ on η_b, f_Ψ on η_Ψ.
-            let beta = sp.b.norm() / sp.inertia_kgm2;
+            let beta = sp.beta;
             let mut r = z_off;
             if sp.hub {
                 residual[r] = sp.b_hat.dot(&f_phi) - beta * f_theta;
@@ -369,7 +372,7 @@ impl<'a> PmorDynamics<'a> {
                     let rows = &section.rows[i];
                     let mut r = if i == 0 { 0 } else { n_z[0] };
                     if sp.hub {
-                        let beta = sp.b.norm() / sp.inertia_kgm2;
+                        let beta = sp.beta;
                         row[r] = (0..n_k).map(|j| sp.b_hat[j] * rows[1 + j]).sum::<f64>() - beta * rows[0];
                         r += 1;
                     }
@@ -428,7 +431,7 @@ impl<'a> PmorDynamics<'a> {
             let q = l.q(i);
             if sp.hub {
                 // The bore moves with η_b: θ = φ − β·η_b.
-                e.outputs.bore_theta[i] -= sp.b.norm() / sp.inertia_kgm2 * dz[z_off];
+                e.outputs.bore_theta[i] -= sp.beta * dz[z_off];
             }
             e.acceleration[q] += f_theta / sp.inertia_kgm2;
             let mut xi_acc = sp.basis.transpose() * (f_phi - &sp.b * (f_theta / sp.inertia_kgm2));
