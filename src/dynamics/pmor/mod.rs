@@ -9,6 +9,8 @@
 //! - [`contact`]: the contact search, Hertz law and band on the deformed flanks;
 //! - [`linear`]: static equilibrium, linearization, natural frequencies, the step limit;
 //! - [`integrator`]: RK4 and velocity Verlet, and the stability limit of each;
+//! - [`quasi_static`]: the contact shapes and the hub direction made quasi-static (the
+//!   default): what is integrated is then the slow part, the mean-axis angle and body modes;
 //! - this file: the state, the pitch anchors, the right-hand side and the RK4 step.
 //!
 //! The pitch anchor kᵢ of each gear is part of the state: the stored shapes cover the reference
