@@ -1407,11 +1407,6 @@ fn regression_spec_values_out_of_range_in_si_are_refused() {
     }
 }
 
-/// A state taken after initialization carries the stability contract of
-/// fmi2ExitInitializationMode (max_step within RK4's limit on the stiffest mesh mode); a forged
-/// one that breaks it (max_step 1e-3 s, or inertias so small the default max_step is unstable)
-/// must be refused when restored, as ExitInitializationMode would refuse it, while the same
-/// settings in a state taken before initialization stay restorable.
 /// Found by the long run of the spec target (1.25·10⁶ cases): teeth a micrometre high left the
 /// fillet table one point long and its lookup panicked. Refused now, naming the field.
 #[test]
@@ -1448,6 +1443,11 @@ fn regression_pmor_outputs_without_contact_do_not_evaluate_it() {
     fmi2FreeInstance(c);
 }
 
+/// A state taken after initialization carries the stability contract of
+/// fmi2ExitInitializationMode (max_step within RK4's limit on the stiffest mesh mode); a forged
+/// one that breaks it (max_step 1e-3 s, or inertias so small the default max_step is unstable)
+/// must be refused when restored, as ExitInitializationMode would refuse it, while the same
+/// settings in a state taken before initialization stay restorable.
 #[test]
 fn regression_restored_state_is_held_to_the_stability_contract() {
     let guid = resources().guid.clone();
@@ -1487,6 +1487,27 @@ fn regression_restored_state_is_held_to_the_stability_contract() {
             fmi2FreeInstance(c);
         }
     }
+}
+
+/// Found by CI's run of `fuzz_call_sequences`: a start angle of 1e300 rad is finite, but the lumped
+/// mesh's energy at it is not (NaN). fmi2ExitInitializationMode stored it as the energy reference,
+/// and the state taken afterwards was then refused by fmi2SetFMUstate. Such start values are now
+/// refused at fmi2ExitInitializationMode, with a log line, and the instance stays usable.
+#[test]
+fn regression_start_values_beyond_the_energys_range_are_refused_at_initialization() {
+    let name = unique_name("huge-start");
+    let c = instantiate(&name);
+    let start = vr("phi_1_start");
+    assert_eq!(fmi2SetReal(c, &start, 1, &1e300), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), ERR);
+    let logs = take_logs(&name);
+    assert!(logs.iter().any(|l| l.contains("start energy")), "{logs:?}");
+    assert_eq!(fmi2Reset(c), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    assert_eq!(fmi2DoStep(c, 0.0, 1e-4, 1), OK);
+    fmi2FreeInstance(c);
 }
 
 /// Found by `fuzz_model_file_decoder`: a model file with a valid checksum but an empty force

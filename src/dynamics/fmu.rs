@@ -733,6 +733,9 @@ impl Model for GearPairFmu {
             s.start_energy_j = dynamics.outputs(&start)?.total_energy_j();
             s.pmor = Some(start);
         }
+        // Finite start values can still hold an energy beyond f64 (a speed of 1e300 rad/s): refused
+        // here, so no state with a non-finite energy reference is ever stored.
+        finite("the start energy (from the start values)", &[s.start_energy_j])?;
         Ok(())
     }
 
