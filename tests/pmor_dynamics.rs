@@ -1061,7 +1061,6 @@ fn the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step() {
     use gearfmu::dynamics::pmor::quasi_static::Condensation;
     let f = fixture();
     let m = &f.model;
-    let rb = base_radii(m);
     let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
     let run = |condensation: Condensation| {
         let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);

@@ -56,18 +56,17 @@ impl PmorGear {
     pub fn node_displacement(&self, flank: Flank, st: &Stencil, node: usize, eta: &[f64]) -> ([f64; 3], [f64; 3]) {
         let rows = self.flank(flank);
         let (eta_phi, eta_psi) = eta.split_at(self.modes());
-        let (mut u, mut du) = ([0.0; 3], [0.0; 3]);
-        for c in 0..3 {
-            let r = 3 * node + c;
-            u[c] = dot(rows.phi_row(r), eta_phi);
-            for a in 0..4 {
-                let (w, dw) = (st.weights.w[a], st.weights.dw[a] / st.step);
-                if w == 0.0 && dw == 0.0 {
-                    continue;
-                }
-                let v = dot(rows.shape_row(st.a0 + a, r), eta_psi);
-                u[c] += w * v;
-                du[c] += dw * v;
+        let mut u = dot3(rows.phi_rows_of_node(node), eta_phi);
+        let mut du = [0.0; 3];
+        for a in 0..4 {
+            let (w, dw) = (st.weights.w[a], st.weights.dw[a] / st.step);
+            if w == 0.0 && dw == 0.0 {
+                continue;
+            }
+            let v = dot3(rows.shape_rows_of_node(st.a0 + a, node), eta_psi);
+            for c in 0..3 {
+                u[c] += w * v[c];
+                du[c] += dw * v[c];
             }
         }
         (u, du)
@@ -90,30 +89,53 @@ impl PmorGear {
         let rows = self.flank(flank);
         let n_k = self.modes();
         let (phi_part, shape_part) = out.split_at_mut(n_k);
-        phi_part.fill(0.0);
+        combine3(dir, rows.phi_rows_of_node(node), phi_part);
         shape_part.fill(0.0);
-        for (c, &d) in dir.iter().enumerate() {
-            let r = 3 * node + c;
-            axpy(d, rows.phi_row(r), phi_part);
-            for a in 0..4 {
-                let w = st.weights.w[a];
-                if w != 0.0 {
-                    axpy(w * d, rows.shape_row(st.a0 + a, r), shape_part);
-                }
+        for a in 0..4 {
+            let w = st.weights.w[a];
+            if w != 0.0 {
+                add_combined3(dir.map(|d| w * d), rows.shape_rows_of_node(st.a0 + a, node), shape_part);
             }
         }
     }
 }
 
+/// The three rows (x, y, z) of a node, stored one after the other (3·n entries), each dotted
+/// with x: one pass over x, three independent sums.
 #[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+fn dot3(rows: &[f64], x: &[f64]) -> [f64; 3] {
+    let n = x.len();
+    let (r0, rest) = rows.split_at(n);
+    let (r1, r2) = rest.split_at(n);
+    let mut s = [0.0; 3];
+    for i in 0..n {
+        s[0] += r0[i] * x[i];
+        s[1] += r1[i] * x[i];
+        s[2] += r2[i] * x[i];
+    }
+    s
 }
 
-/// y += a·x.
+/// out = Σ_c d_c·row_c over a node's three rows (3·n entries): one pass over out.
 #[inline]
-fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
-    y.iter_mut().zip(x).for_each(|(y, x)| *y += a * x);
+fn combine3(d: [f64; 3], rows: &[f64], out: &mut [f64]) {
+    let n = out.len();
+    let (r0, rest) = rows.split_at(n);
+    let (r1, r2) = rest.split_at(n);
+    for i in 0..n {
+        out[i] = d[0] * r0[i] + d[1] * r1[i] + d[2] * r2[i];
+    }
+}
+
+/// out += Σ_c d_c·row_c.
+#[inline]
+fn add_combined3(d: [f64; 3], rows: &[f64], out: &mut [f64]) {
+    let n = out.len();
+    let (r0, rest) = rows.split_at(n);
+    let (r1, r2) = rest.split_at(n);
+    for i in 0..n {
+        out[i] += d[0] * r0[i] + d[1] * r1[i] + d[2] * r2[i];
+    }
 }
 
 /// One gear's inertia, elastic and damping terms at a state, and the work space they are

@@ -120,6 +120,21 @@ impl FlankRows {
         &self.phi_rows.as_slice()[r * n..(r + 1) * n]
     }
 
+    /// The three rows (x, y, z) of Φ at a node, one after the other (3·n_k entries).
+    #[inline]
+    pub fn phi_rows_of_node(&self, node: usize) -> &[f64] {
+        let n = self.phi_rows.nrows();
+        &self.phi_rows.as_slice()[3 * node * n..3 * (node + 1) * n]
+    }
+
+    /// The three rows of stored sample a at a node (3·n_t entries).
+    #[inline]
+    pub fn shape_rows_of_node(&self, a: usize, node: usize) -> &[f64] {
+        let m = &self.shape_rows[a];
+        let n = m.nrows();
+        &m.as_slice()[3 * node * n..3 * (node + 1) * n]
+    }
+
     /// Row r of stored sample a (n_t entries).
     #[inline]
     pub fn shape_row(&self, a: usize, r: usize) -> &[f64] {
