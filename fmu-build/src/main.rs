@@ -41,6 +41,17 @@ enum ModelChoice {
     Lumped,
 }
 
+/// Where the lumped model's mesh law comes from.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum MeshLawChoice {
+    /// The loaded transmission error of the PMOR-Hertz FE statics (what `ste` computes, on the
+    /// same mesh), tabulated over roll position × mesh force: the FE-grade fast level.
+    Fe,
+    /// Potential-energy teeth and Weber's contact on the geometry alone: the no-FE estimate
+    /// (seconds to build, no mesh; its single-contact stiffness is 15–21 % softer than ISO c′).
+    Analytic,
+}
+
 /// Options of the PMOR-Hertz build (`fmu-build build --model pmor-hertz`). The defaults that depend
 /// on the pair (ROM torque, depth) follow from the spec: see `build_rom`.
 #[derive(clap::Args, Clone)]
@@ -164,6 +175,9 @@ enum Command {
         output: PathBuf,
         #[arg(long, value_enum, default_value = "pmor-hertz")]
         model: ModelChoice,
+        /// The lumped model's mesh law (with --model lumped; default fe).
+        #[arg(long, value_enum)]
+        mesh_law: Option<MeshLawChoice>,
         /// The FMU binary (cdylib); default: libgearfmu.so next to this executable.
         #[arg(long)]
         library: Option<PathBuf>,
@@ -177,6 +191,11 @@ enum Command {
         spec: PathBuf,
         #[arg(long)]
         json: Option<PathBuf>,
+        /// The lumped mesh law to print and dump (as `build --model lumped --mesh-law`).
+        #[arg(long, value_enum, default_value = "fe")]
+        mesh_law: MeshLawChoice,
+        #[command(flatten)]
+        resolution: Resolution,
     },
     /// Mesh both gears: nodes, elements and DOFs per gear; optionally a VTK file per gear.
     Mesh {
@@ -493,11 +512,6 @@ fn check_output_folder(file: &Path) -> Result<()> {
     }
 }
 
-fn load_pair(spec: &Path) -> Result<GearPair> {
-    let spec = PairSpec::load(spec)?;
-    Ok(GearPair::from_spec(&spec)?)
-}
-
 fn default_library() -> Result<PathBuf> {
     let exe = std::env::current_exe()?;
     let dir = exe.parent().context("executable has no folder")?;
@@ -508,15 +522,21 @@ fn build(
     spec: &Path,
     output: &Path,
     model: ModelChoice,
+    mesh_law: Option<MeshLawChoice>,
     library: Option<PathBuf>,
     rom: &RomOptions,
     resolution: Resolution,
 ) -> Result<()> {
     check_output_folder(output)?;
-    // The PMOR-Hertz FMU's accuracy rests on the FE mesh: where the spec's [mesh] is silent it
-    // takes the mesh measured to meet the DTE's accuracy (as every command now does); the lumped
-    // model meshes nothing.
-    let fallback = matches!(model, ModelChoice::PmorHertz).then(MeshSpec::dynamic_default);
+    if matches!(model, ModelChoice::PmorHertz) && mesh_law.is_some() {
+        anyhow::bail!("--mesh-law chooses the lumped model's mesh law: give it with --model lumped");
+    }
+    let mesh_law = mesh_law.unwrap_or(MeshLawChoice::Fe);
+    // The FE models' accuracy rests on the mesh: where the spec's [mesh] is silent it takes the
+    // mesh measured to meet the DTE's accuracy (as every command does); the analytic law meshes
+    // nothing.
+    let meshes = matches!(model, ModelChoice::PmorHertz) || mesh_law == MeshLawChoice::Fe;
+    let fallback = meshes.then(MeshSpec::dynamic_default);
     let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback, rom.depth_mm)?;
     let library = match library {
         Some(l) => l,
@@ -526,7 +546,7 @@ fn build(
         format!("cannot read the FMU binary {} (build it: cargo build --release -p gearfmu)", library.display())
     })?;
     let kind = match model {
-        ModelChoice::Lumped => ModelKind::Lumped(LumpedMesh::from_pair(&pair).map_err(anyhow::Error::msg)?),
+        ModelChoice::Lumped => ModelKind::Lumped(lumped_mesh(&pair, &mesh_spec, mesh_law, rom.depth_mm)?),
         ModelChoice::PmorHertz => ModelKind::PmorHertz(Box::new(build_rom(&pair, &mesh_spec, rom)?)),
     };
     let guid = ModelFile::compute_guid(interface::VARIABLES_TOML, &pair.name, &kind);
@@ -539,8 +559,15 @@ fn build(
                 ("max_step", gearfmu::dynamics::fmu::LUMPED_DEFAULT_MAX_STEP_S),
             ],
             format!(
-                "Gear pair {} (z {}/{}), lumped model: rigid gears, potential-energy mesh stiffness, backlash",
-                pair.name, pair.gear1.teeth, pair.gear2.teeth
+                "Gear pair {} (z {}/{}), lumped model: rigid gears, {}, backlash",
+                pair.name,
+                pair.gear1.teeth,
+                pair.gear2.teeth,
+                match mesh.law_source {
+                    gearfmu::dynamics::lumped::MeshLawSource::Analytic => "potential-energy mesh stiffness (analytic)",
+                    gearfmu::dynamics::lumped::MeshLawSource::FeStatics =>
+                        "mesh law from the PMOR-Hertz FE statics (loaded transmission error over roll and load)",
+                }
             ),
         ),
         ModelKind::PmorHertz(m) => (
@@ -586,6 +613,40 @@ fn build(
     zip.finish()?;
     println!("wrote {} (GUID {guid})", output.display());
     Ok(())
+}
+
+/// The lumped model's mesh: from the FE statics (the reduction `ste` makes, then a table of
+/// static cases over roll × force; progress and cost reported) or from the geometry alone.
+fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: Option<f64>) -> Result<LumpedMesh> {
+    use gearfmu::dynamics::lumped::MeshLawSource;
+    use gearfmu::rom::static_mesh_law::{drive_law_from_statics, force_levels, FORCE_LEVELS, TABLE_ROWS};
+    if law == MeshLawChoice::Analytic {
+        return LumpedMesh::from_pair(pair).map_err(anyhow::Error::msg);
+    }
+    let started = std::time::Instant::now();
+    let depth_m = depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(pair), |d| d * 1e-3);
+    let method = Method::PmorHertz { depth_m, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
+    let bar = spinner("mesh law from the FE statics: reducing both gears".into());
+    let reduced = ReducedPair::build(pair, mesh, method, |gear, done| {
+        bar.set_message(format!("mesh law from the FE statics: gear {}, {done} partial models", gear + 1))
+    })
+    .map_err(anyhow::Error::msg)?;
+    let reduction_s = started.elapsed().as_secs_f64();
+    let levels = force_levels(pair, FORCE_LEVELS);
+    let reference_force = 200.0e3 * pair.face_width_m;
+    let (drive, pairs) = drive_law_from_statics(&reduced, &levels, TABLE_ROWS, reference_force, |done| {
+        bar.set_message(format!("mesh law from the FE statics: roll position {done} of {TABLE_ROWS}"))
+    })
+    .map_err(anyhow::Error::msg)?;
+    bar.finish_and_clear();
+    println!(
+        "lumped mesh law from the PMOR-Hertz statics ({} elements across/along/rim): reduction {reduction_s:.1} s, \
+         {TABLE_ROWS} roll positions × {FORCE_LEVELS} forces up to {:.4e} N in {:.1} s",
+        format_args!("{}/{}/{}", mesh.elements_across_tooth, mesh.elements_along_profile, mesh.elements_in_rim),
+        levels[levels.len() - 1],
+        started.elapsed().as_secs_f64() - reduction_s
+    );
+    Ok(LumpedMesh::from_drive_law(pair, MeshLawSource::FeStatics, drive, pairs))
 }
 
 /// The offline PMOR-Hertz build: FE models, eigenmodes, static contact shapes, invariants.
@@ -696,9 +757,9 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
     Ok(model)
 }
 
-fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
-    let pair = load_pair(spec)?;
-    let mesh = LumpedMesh::from_pair(&pair).map_err(anyhow::Error::msg)?;
+fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, resolution: Resolution) -> Result<()> {
+    let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
+    let mesh = lumped_mesh(&pair, &mesh_spec, law, None)?;
     let params = LumpedParameters::defaults(&mesh);
     let iso = iso6336::mesh_stiffness_c_gamma_alpha(&pair);
     let iso_total = iso6336::to_newton_per_metre(iso, pair.face_width_m);
@@ -754,6 +815,10 @@ fn inspect(spec: &Path, json: Option<PathBuf>) -> Result<()> {
             "reference_stiffness_n_per_m": mesh.reference_stiffness(),
             "mesh_natural_frequency_hz": mesh_natural_frequency_hz(&mesh, &params, mesh.reference_force_n),
             "iso6336_c_gamma_alpha_n_per_m": iso_total,
+            "mesh_law": match mesh.law_source {
+                gearfmu::dynamics::lumped::MeshLawSource::Analytic => "analytic",
+                gearfmu::dynamics::lumped::MeshLawSource::FeStatics => "fe",
+            },
         });
         std::fs::write(&path, serde_json::to_string_pretty(&value)?)?;
         println!("wrote {}", path.display());
@@ -1076,10 +1141,10 @@ fn tooth_stiffness_command(spec: &Path, resolution: Resolution) -> Result<()> {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Build { spec, output, model, library, rom, resolution } => {
-            build(&spec, &output, model, library, &rom, resolution)
+        Command::Build { spec, output, model, mesh_law, library, rom, resolution } => {
+            build(&spec, &output, model, mesh_law, library, &rom, resolution)
         }
-        Command::Inspect { spec, json } => inspect(&spec, json),
+        Command::Inspect { spec, json, mesh_law, resolution } => inspect(&spec, json, mesh_law, resolution),
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),
         Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),

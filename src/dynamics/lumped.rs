@@ -31,6 +31,8 @@ pub struct LumpedMesh {
     /// Roll position at θ₁ = 0: a tooth pair then touches at the pitch point (the reference mesh
     /// position where both angles are zero).
     pub roll_offset_m: f64,
+    /// Where the drive flank's law comes from.
+    pub law_source: MeshLawSource,
     /// Load-dependent force laws of the drive and the coast flanks.
     pub drive: MeshLaw,
     pub coast: MeshLaw,
@@ -55,11 +57,34 @@ pub const TABLE_SAMPLES: usize = 1024;
 pub const AXIAL_SLICES: usize = 40;
 pub const FORCE_LEVELS: usize = 24;
 
+/// The origin of a lumped mesh law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MeshLawSource {
+    /// Potential-energy teeth and Weber's contact on the geometry alone (`mesh_stiffness`): the
+    /// no-FE estimate.
+    Analytic,
+    /// The loaded transmission error of the PMOR-Hertz FE statics (`rom::static_mesh_law`).
+    FeStatics,
+}
+
 impl LumpedMesh {
-    /// Builds the lumped mesh from the geometry (potential-energy teeth, Hertz contact; offline).
+    /// Builds the lumped mesh from the geometry alone (potential-energy teeth, Hertz contact;
+    /// offline): the no-FE estimate.
     pub fn from_pair(pair: &GearPair) -> Result<LumpedMesh, String> {
         let levels = force_levels(pair, FORCE_LEVELS);
         let (drive, drive_pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
+        Ok(Self::from_drive_law(pair, MeshLawSource::Analytic, drive, drive_pairs))
+    }
+
+    /// The lumped mesh around a drive-flank law (rows at ξᵢ = i·p_b/N) and the tooth pairs in
+    /// contact per row; the coast flank mirrors it.
+    pub fn from_drive_law(
+        pair: &GearPair,
+        law_source: MeshLawSource,
+        drive: MeshLaw,
+        drive_pairs: Vec<u32>,
+    ) -> LumpedMesh {
+        let levels = drive.force_levels_n.clone();
         let n = drive.rows();
         let roll_offset = pair.pitch_point_m() - pair.path_start_m;
         // Coast flank: the mirror image of the drive flank about the reference position (symmetric
@@ -69,11 +94,11 @@ impl LumpedMesh {
         let k = levels.len();
         let coast_rows: Vec<f64> =
             (0..n).flat_map(|i| drive.deflection_m[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
-        let coast = MeshLaw::new(pair.base_pitch_m, levels.clone(), coast_rows);
+        let coast = MeshLaw::new(pair.base_pitch_m, levels, coast_rows);
         let coast_pairs = (0..n).map(|i| drive_pairs[mirror(i)]).collect();
         let reference_force = 200.0e3 * pair.face_width_m;
         let reference_stiffness = drive.mean_tangent_stiffness(reference_force);
-        Ok(LumpedMesh {
+        LumpedMesh {
             teeth_1: pair.gear1.teeth,
             teeth_2: pair.gear2.teeth,
             base_radius_1_m: pair.gear1.base_radius_m,
@@ -84,6 +109,7 @@ impl LumpedMesh {
             backlash_m: pair.backlash_loa_m,
             mesh_damping_ratio: pair.mesh_damping_ratio,
             roll_offset_m: roll_offset,
+            law_source,
             drive,
             coast,
             drive_pairs,
@@ -91,7 +117,7 @@ impl LumpedMesh {
             reference_force_n: reference_force,
             reference_stiffness_n_per_m: reference_stiffness,
             yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(pair),
-        })
+        }
     }
 
     /// Mean tangent stiffness of the drive flank at the reference force (N/m).

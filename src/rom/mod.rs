@@ -6,6 +6,7 @@ pub mod dynamic_reductor;
 pub mod flank;
 pub mod reductor;
 pub mod sharing;
+pub mod static_mesh_law;
 pub mod statics;
 pub mod svd;
 pub mod sweep;

@@ -1,0 +1,100 @@
+//! The lumped model's mesh law from the FE statics: the loaded transmission error of the
+//! PMOR-Hertz static analyses, tabulated over roll position × mesh force — the chain the
+//! commercial tools use (loaded tooth contact analysis → transmission-error / mesh-stiffness map
+//! → system dynamics), here on the same reduction `fmu-build ste` solves.
+//!
+//! Row i of the table is roll position ξᵢ = i·p_b/N, in the lumped model's coordinate
+//! ξ = r_b1·θ₁ + ξ₀ (ξ₀ puts a tooth pair at the pitch point at θ₁ = 0, `LumpedMesh`). A static
+//! case holds gear 2 at θ₂ and finds θ₁ with r_b1·θ₁ = r_b2·θ₂ + δ, δ the static transmission
+//! error; so the case that belongs to row i at force F_k has r_b2·θ₂ = ξᵢ − ξ₀ − δ_k(ξᵢ). δ is
+//! a few tens of µm against a base pitch of about 15 mm: one fixed-point pass from the case at
+//! r_b2·θ₂ = ξᵢ − ξ₀ settles it to well below the table's own resolution where the STE is
+//! smooth, and only moves the row across a contact change by δ's change there.
+//!
+//! The mesh force F is the lumped model's: along the transverse line of action, with the torque
+//! on gear 1 T₁ = r_b1·F. Levels are dense at light load, where Hertz contact is most
+//! nonlinear (`mesh_stiffness::force_levels`' spacing), and stop at the yield force
+//! (`gear::rating`): the statics refuse a case beyond it, and the law continues past its last
+//! level with its last slope, where the FMU already logs the yield warning.
+
+use super::sweep::ReducedPair;
+use crate::dynamics::mesh_law::MeshLaw;
+use rayon::prelude::*;
+
+/// Roll positions per base pitch and force levels of the FE-fed law (chosen by measurement:
+/// BENCHMARKS §5, the mesh law).
+pub const TABLE_ROWS: usize = 128;
+pub const FORCE_LEVELS: usize = 12;
+
+/// The force levels: F_k = F_top·(k/K)², F_top the smaller of 1500 N/mm of face width (the
+/// analytic law's top) and the yield force.
+pub fn force_levels(pair: &crate::gear::GearPair, levels: usize) -> Vec<f64> {
+    let f_top = (1500.0e3 * pair.face_width_m).min(crate::gear::rating::yield_mesh_force_n(pair));
+    (0..=levels).map(|k| f_top * (k as f64 / levels as f64).powi(2)).collect()
+}
+
+/// The drive flank's law from the statics of `reduced`: N rows × the levels, and the tooth pairs
+/// in contact per row (at the level nearest `pairs_at_force_n`). `progress(done)` counts rows.
+pub fn drive_law_from_statics(
+    reduced: &ReducedPair,
+    levels: &[f64],
+    rows: usize,
+    pairs_at_force_n: f64,
+    progress: impl Fn(usize) + Sync,
+) -> Result<(MeshLaw, Vec<u32>), String> {
+    let pair = &reduced.pair;
+    let model = reduced.static_model()?;
+    let (rb1, rb2) = (pair.gear1.base_radius_m, pair.gear2.base_radius_m);
+    let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
+    let roll_offset = pair.pitch_point_m() - pair.path_start_m;
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass).
+    let ste_at = |roll: f64, torque: f64| -> Result<(f64, usize), String> {
+        let solve = |delta: f64| {
+            let theta2 = ((roll - roll_offset - delta) / rb2).rem_euclid(pitch2);
+            model.solve(theta2, torque)
+        };
+        let first = solve(0.0)?;
+        let case = solve(first.ste_m)?;
+        Ok((case.ste_m, case.pairs_in_contact))
+    };
+    let pairs_level = (1..levels.len())
+        .min_by(|&a, &b| (levels[a] - pairs_at_force_n).abs().total_cmp(&(levels[b] - pairs_at_force_n).abs()))
+        .ok_or("the mesh law needs a force level above zero")?;
+    let table: Vec<Result<(Vec<f64>, u32), String>> = (0..rows)
+        .into_par_iter()
+        .map(|i| {
+            let roll = pair.base_pitch_m * i as f64 / rows as f64;
+            let mut row = vec![0.0; levels.len()];
+            let mut pairs = 0;
+            for k in 1..levels.len() {
+                let (ste, n) = ste_at(roll, levels[k] * rb1)
+                    .map_err(|e| format!("mesh law from the statics, roll {roll:.4e} m, force {:.4e} N: {e}", levels[k]))?;
+                row[k] = ste;
+                if k == pairs_level {
+                    pairs = n as u32;
+                }
+            }
+            // F(δ) must be single-valued: the deflection grows with the force.
+            if let Some(k) = (1..levels.len()).find(|&k| !(row[k] > row[k - 1])) {
+                return Err(format!(
+                    "mesh law from the statics: at roll {roll:.4e} m the STE does not grow from {:.4e} N to {:.4e} N ({:.6e} → {:.6e} m)",
+                    levels[k - 1],
+                    levels[k],
+                    row[k - 1],
+                    row[k]
+                ));
+            }
+            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+            Ok((row, pairs))
+        })
+        .collect();
+    let mut deflection = Vec::with_capacity(rows * levels.len());
+    let mut pairs = Vec::with_capacity(rows);
+    for r in table {
+        let (row, n) = r?;
+        deflection.extend(row);
+        pairs.push(n);
+    }
+    Ok((MeshLaw::new(pair.base_pitch_m, levels.to_vec(), deflection), pairs))
+}
