@@ -543,8 +543,9 @@ fn small_lumped_model_bin() -> Vec<u8> {
     };
     mesh.drive = decimate(&mesh.drive);
     mesh.coast = decimate(&mesh.coast);
-    mesh.drive_pairs = mesh.drive_pairs.iter().step_by(8).copied().collect();
-    mesh.coast_pairs = mesh.coast_pairs.iter().step_by(8).copied().collect();
+    let k = mesh.drive.force_levels_n.len();
+    mesh.drive_pairs = mesh.drive_pairs.chunks(k).step_by(8).flatten().copied().collect();
+    mesh.coast_pairs = mesh.coast_pairs.chunks(k).step_by(8).flatten().copied().collect();
     let pair = kurokawa_spur();
     let model = ModelKind::Lumped(mesh);
     let guid = ModelFile::compute_guid(gearfmu::interface::VARIABLES_TOML, &pair.name, &model);

@@ -117,7 +117,7 @@ fn weber_law_single_contact_stiffness_against_iso_6336_c_prime_is_17_percent_sof
     let c_prime = iso6336::single_stiffness(&p);
     let mesh = lumped(&p);
     let n = mesh.drive.rows();
-    let rows: Vec<usize> = (0..n).filter(|&i| mesh.drive_pairs[i] == 1).collect();
+    let rows: Vec<usize> = (0..n).filter(|&i| mesh.drive_pairs_under(0)[i] == 1).collect();
     let b_mm = p.face_width_m * 1e3;
     for (specific_load, measured) in [(100.0, 0.794), (200.0, 0.809), (392.0, 0.825), (1000.0, 0.847)] {
         let force = specific_load * b_mm;
@@ -213,7 +213,7 @@ fn weber_mesh_law_is_linear_teeth_in_series_with_weber_written_out_and_stiffens_
     let eps = t.contact_ratio();
     let roll = t.pb * (eps - 1.0 + 0.5 * (2.0 - eps));
     let row = (roll / t.pb * n as f64).round() as usize;
-    assert_eq!(mesh.drive_pairs[row], 1, "the table has one pair at the middle of the single-contact zone");
+    assert_eq!(mesh.drive_pairs_under(0)[row], 1, "the table has one pair at the middle of the single-contact zone");
     let roll = t.pb * row as f64 / n as f64;
     let u = t.u_a + roll;
     let rho = [u, t.loa - u];
@@ -322,12 +322,12 @@ fn torque_step_rings_at_the_mesh_natural_frequency() {
     let mid_load = 310.0 / spur.base_radius_1_m;
     let params = LumpedParameters::defaults(&spur);
     let m_e = gearfmu::dynamics::lumped::equivalent_mesh_mass(&spur, &params);
-    let n = spur.drive_pairs.len();
+    let n = spur.drive.rows();
     for pairs in [1, 2] {
         // The middle of the longest run of samples with this many pairs in contact.
         let (mut best, mut run_start, mut best_len) = (0, 0, 0);
         for i in 0..2 * n {
-            if spur.drive_pairs[i % n] != pairs {
+            if spur.drive_pairs_under(0)[i % n] != pairs {
                 run_start = i + 1;
             } else if i + 1 - run_start > best_len {
                 best_len = i + 1 - run_start;
@@ -426,10 +426,10 @@ fn spur_double_contact_share_equals_textbook_contact_ratio_minus_one() {
     let p = pair("kurokawa_spur.toml");
     let eps = TextbookSpur::new(&p).contact_ratio();
     let mesh = lumped(&p);
-    let double = mesh.drive_pairs.iter().filter(|&&n| n == 2).count() as f64 / mesh.drive_pairs.len() as f64;
-    let single = mesh.drive_pairs.iter().filter(|&&n| n == 1).count() as f64 / mesh.drive_pairs.len() as f64;
+    let double = mesh.drive_pairs_under(0).iter().filter(|&&n| n == 2).count() as f64 / mesh.drive.rows() as f64;
+    let single = mesh.drive_pairs_under(0).iter().filter(|&&n| n == 1).count() as f64 / mesh.drive.rows() as f64;
     println!("double-contact share {double:.4}, textbook ε_α − 1 = {:.4}", eps - 1.0);
-    assert!((double - (eps - 1.0)).abs() < 2.0 / mesh.drive_pairs.len() as f64);
+    assert!((double - (eps - 1.0)).abs() < 2.0 / mesh.drive.rows() as f64);
     assert!((single + double - 1.0).abs() < 1e-12);
 }
 
@@ -452,7 +452,7 @@ fn fe_fed_mesh_law_reproduces_the_pmor_hertz_statics() {
     let method = Method::PmorHertz { depth_m, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
     let reduced = ReducedPair::build(&p, &spec.mesh, method, |_, _| {}).unwrap();
     let levels = force_levels(&p, FORCE_LEVELS);
-    let (law, pairs) = drive_law_from_statics(&reduced, &levels, TABLE_ROWS, 200.0e3 * p.face_width_m, |_| {}).unwrap();
+    let (law, pairs) = drive_law_from_statics(&reduced, &levels, TABLE_ROWS, |_| {}).unwrap();
     assert!(pairs.iter().all(|&n| n == 1 || n == 2), "a spur pair of ε_α 1.6 has one or two pairs in contact");
     let fe = LumpedMesh::from_drive_law(&p, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, law, pairs);
     let analytic = lumped(&p);

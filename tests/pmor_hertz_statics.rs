@@ -112,13 +112,13 @@ fn spur_static_transmission_error_zone_by_zone_against_the_lumped_model_iso_and_
                 let case = model.solve(theta2, torque).unwrap();
                 // The lumped law's roll at the same kinematic position: ξ = r_b2·θ₂ + (u_C − u_A).
                 let roll = p.gear2.base_radius_m * theta2 + lumped.roll_offset_m;
-                let n = lumped.drive_pairs.len();
+                let n = lumped.drive.rows();
                 let row = ((roll / p.base_pitch_m).rem_euclid(1.0) * n as f64).round() as usize % n;
                 Sample {
                     ste: case.ste_m,
                     pairs: case.pairs_in_contact,
                     lumped_ste: lumped.drive.static_deflection(force, roll),
-                    lumped_pairs: lumped.drive_pairs[row],
+                    lumped_pairs: lumped.drive_pairs_under(0)[row],
                 }
             })
             .collect();

@@ -633,8 +633,7 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
     .map_err(anyhow::Error::msg)?;
     let reduction_s = started.elapsed().as_secs_f64();
     let levels = force_levels(pair, FORCE_LEVELS);
-    let reference_force = 200.0e3 * pair.face_width_m;
-    let (drive, pairs) = drive_law_from_statics(&reduced, &levels, TABLE_ROWS, reference_force, |done| {
+    let (drive, pairs) = drive_law_from_statics(&reduced, &levels, TABLE_ROWS, |done| {
         bar.set_message(format!("mesh law from the FE statics: roll position {done} of {TABLE_ROWS}"))
     })
     .map_err(anyhow::Error::msg)?;

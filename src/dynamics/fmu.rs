@@ -487,13 +487,13 @@ fn check_lumped_mesh(m: &LumpedMesh) -> Result<(), String> {
     }
     m.drive.check("drive")?;
     m.coast.check("coast")?;
-    if m.drive_pairs.len() != m.drive.rows() || m.coast_pairs.len() != m.coast.rows() {
+    if m.drive_pairs.len() != m.drive.deflection_m.len() || m.coast_pairs.len() != m.coast.deflection_m.len() {
         return Err(format!(
-            "the lumped model data has {}/{} contact-pair counts for {}/{} law rows",
+            "the lumped model data has {}/{} contact-pair counts for {}/{} law entries",
             m.drive_pairs.len(),
             m.coast_pairs.len(),
-            m.drive.rows(),
-            m.coast.rows()
+            m.drive.deflection_m.len(),
+            m.coast.deflection_m.len()
         ));
     }
     Ok(())

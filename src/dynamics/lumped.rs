@@ -36,7 +36,9 @@ pub struct LumpedMesh {
     /// Load-dependent force laws of the drive and the coast flanks.
     pub drive: MeshLaw,
     pub coast: MeshLaw,
-    /// Tooth pairs in contact at ξᵢ = i·p_b/N.
+    /// Tooth pairs in contact at ξᵢ = i·p_b/N under each force level, laid out as the law's
+    /// deflections (row-major, N rows of K+1): under load the contact extends beyond the rigid
+    /// geometry's, so the double-contact zone widens with the force.
     pub drive_pairs: Vec<u32>,
     pub coast_pairs: Vec<u32>,
     /// The mesh force at which the reference stiffness (damping, natural frequency) is taken:
@@ -72,12 +74,14 @@ impl LumpedMesh {
     /// offline): the no-FE estimate.
     pub fn from_pair(pair: &GearPair) -> Result<LumpedMesh, String> {
         let levels = force_levels(pair, FORCE_LEVELS);
-        let (drive, drive_pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
+        let (drive, pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
+        // The analytic law counts the pairs of the rigid geometry: the same under every force.
+        let drive_pairs = pairs.iter().flat_map(|&n| std::iter::repeat_n(n, levels.len())).collect();
         Ok(Self::from_drive_law(pair, MeshLawSource::Analytic, drive, drive_pairs))
     }
 
     /// The lumped mesh around a drive-flank law (rows at ξᵢ = i·p_b/N) and the tooth pairs in
-    /// contact per row; the coast flank mirrors it.
+    /// contact per row and force level; the coast flank mirrors it.
     pub fn from_drive_law(
         pair: &GearPair,
         law_source: MeshLawSource,
@@ -95,7 +99,7 @@ impl LumpedMesh {
         let coast_rows: Vec<f64> =
             (0..n).flat_map(|i| drive.deflection_m[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
         let coast = MeshLaw::new(pair.base_pitch_m, levels, coast_rows);
-        let coast_pairs = (0..n).map(|i| drive_pairs[mirror(i)]).collect();
+        let coast_pairs = (0..n).flat_map(|i| drive_pairs[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
         let reference_force = 200.0e3 * pair.face_width_m;
         let reference_stiffness = drive.mean_tangent_stiffness(reference_force);
         LumpedMesh {
@@ -118,6 +122,12 @@ impl LumpedMesh {
             reference_stiffness_n_per_m: reference_stiffness,
             yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(pair),
         }
+    }
+
+    /// Tooth pairs in contact on the drive flank, row by row, under force level k.
+    pub fn drive_pairs_under(&self, k: usize) -> Vec<u32> {
+        let levels = self.drive.force_levels_n.len();
+        self.drive_pairs.chunks(levels).map(|row| row[k]).collect()
     }
 
     /// Mean tangent stiffness of the drive flank at the reference force (N/m).
@@ -198,10 +208,14 @@ pub struct MeshState {
     pub potential_j: f64,
 }
 
-fn nearest(table: &[u32], pitch: f64, xi: f64) -> u32 {
-    let n = table.len();
-    let i = (xi.rem_euclid(pitch) / pitch * n as f64).round() as usize % n;
-    table[i]
+/// The entry of a per-row-and-level table (`LumpedMesh::drive_pairs`) at the row nearest ξ and
+/// the force level nearest F.
+fn nearest(law: &MeshLaw, table: &[u32], force_n: f64, xi: f64) -> u32 {
+    let (n, levels) = (law.rows(), &law.force_levels_n);
+    let i = (xi.rem_euclid(law.base_pitch_m) / law.base_pitch_m * n as f64).round() as usize % n;
+    let above = levels.partition_point(|&f| f < force_n).min(levels.len() - 1);
+    let k = if above > 0 && force_n - levels[above - 1] < levels[above] - force_n { above - 1 } else { above };
+    table[i * levels.len() + k]
 }
 
 impl LumpedParameters {
@@ -249,7 +263,7 @@ impl<'a> LumpedModel<'a> {
             out.roll_force_n = law.roll_force_n;
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
-            out.pairs_in_contact = nearest(&m.drive_pairs, m.base_pitch_m, xi);
+            out.pairs_in_contact = nearest(&m.drive, &m.drive_pairs, law.force_n, xi);
         } else if delta < -m.backlash_m {
             // The coast law is written for a positive closure −(δ + j); its force pushes back.
             let law = m.coast.evaluate(-(delta + m.backlash_m), xi);
@@ -258,7 +272,7 @@ impl<'a> LumpedModel<'a> {
             out.roll_force_n = law.roll_force_n;
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
-            out.pairs_in_contact = nearest(&m.coast_pairs, m.base_pitch_m, xi);
+            out.pairs_in_contact = nearest(&m.coast, &m.coast_pairs, law.force_n, xi);
         }
         out
     }

@@ -34,12 +34,11 @@ pub fn force_levels(pair: &crate::gear::GearPair, levels: usize) -> Vec<f64> {
 }
 
 /// The drive flank's law from the statics of `reduced`: N rows × the levels, and the tooth pairs
-/// in contact per row (at the level nearest `pairs_at_force_n`). `progress(done)` counts rows.
+/// in contact at each (laid out as the law's deflections). `progress(done)` counts rows.
 pub fn drive_law_from_statics(
     reduced: &ReducedPair,
     levels: &[f64],
     rows: usize,
-    pairs_at_force_n: f64,
     progress: impl Fn(usize) + Sync,
 ) -> Result<(MeshLaw, Vec<u32>), String> {
     let pair = &reduced.pair;
@@ -58,23 +57,23 @@ pub fn drive_law_from_statics(
         let case = solve(first.ste_m)?;
         Ok((case.ste_m, case.pairs_in_contact))
     };
-    let pairs_level = (1..levels.len())
-        .min_by(|&a, &b| (levels[a] - pairs_at_force_n).abs().total_cmp(&(levels[b] - pairs_at_force_n).abs()))
-        .ok_or("the mesh law needs a force level above zero")?;
-    let table: Vec<Result<(Vec<f64>, u32), String>> = (0..rows)
+    if levels.len() < 2 {
+        return Err("the mesh law needs a force level above zero".into());
+    }
+    let table: Vec<Result<(Vec<f64>, Vec<u32>), String>> = (0..rows)
         .into_par_iter()
         .map(|i| {
             let roll = pair.base_pitch_m * i as f64 / rows as f64;
             let mut row = vec![0.0; levels.len()];
-            let mut pairs = 0;
+            let mut pairs = vec![0; levels.len()];
             for k in 1..levels.len() {
                 let (ste, n) = ste_at(roll, levels[k] * rb1)
                     .map_err(|e| format!("mesh law from the statics, roll {roll:.4e} m, force {:.4e} N: {e}", levels[k]))?;
                 row[k] = ste;
-                if k == pairs_level {
-                    pairs = n as u32;
-                }
+                pairs[k] = n as u32;
             }
+            // Under no load: the pairs the lightest load touches.
+            pairs[0] = pairs[1];
             // F(δ) must be single-valued: the deflection grows with the force.
             if let Some(k) = (1..levels.len()).find(|&k| !(row[k] > row[k - 1])) {
                 return Err(format!(
@@ -90,11 +89,11 @@ pub fn drive_law_from_statics(
         })
         .collect();
     let mut deflection = Vec::with_capacity(rows * levels.len());
-    let mut pairs = Vec::with_capacity(rows);
+    let mut pairs = Vec::with_capacity(rows * levels.len());
     for r in table {
         let (row, n) = r?;
         deflection.extend(row);
-        pairs.push(n);
+        pairs.extend(n);
     }
     Ok((MeshLaw::new(pair.base_pitch_m, levels.to_vec(), deflection), pairs))
 }
