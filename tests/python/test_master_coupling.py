@@ -284,3 +284,44 @@ def test_start_at_equilibrium_through_fmpy(gear_fmus, kind):
     assert static > 0.0
     assert swing < 1e-4 * static
     assert cold_swing > 0.5 * static
+
+
+def test_example_3_lumped_and_pmor_hertz_agree_but_for_the_body_modes(gear_fmus):
+    """Two fidelity levels, one answer (issue 26; evidence: the PMOR-Hertz FMU, the lumped FMU
+    fed by the same FE statics, one script, one loop). Example 3 at a 20 µs communication step:
+    over the last mesh cycle the DTE means agree within 2 % (measured 0.09 %). What differs
+    is dynamic, and it is what the lumped level leaves out: after the ramp (t > 8 ms) at least
+    70 % of the difference's power (measured 82 %) lies between 2 and 4.2 kHz, where the
+    PMOR-Hertz pair has its body modes (2.36–2.83 kHz, ζ 1 %, `fmu-build linearize`) next to the
+    mesh mode (3.0–3.7 kHz) that both carry; the rest below it (the tables' interpolation at the
+    mesh frequency's harmonics)."""
+    import numpy as np
+
+    h = 2e-5
+    steps = int(round(END_S / h))
+    dte = {}
+    for kind in ("spur-pmor", "spur"):
+        slave = GearSlave(gear_fmus[kind], f"example-3-{kind}")
+        w_2, rows = 0.0, []
+        for k in range(steps):
+            slave.set_inputs(ramp(k * h), -BRAKE * w_2)
+            slave.step(k * h, h)
+            w_2, d = slave.fmu.getReal([slave.vr["w_2"], slave.vr["dte"]])
+            rows.append(((k + 1) * h, w_2, d))
+        slave.free()
+        dte[kind] = np.array(rows)
+    t = dte["spur"][:, 0]
+    z1, z2 = teeth(gear_fmus["spur"])
+    # The last mesh cycle of gear 2 (its angle is the integral of ω₂).
+    phi_2 = np.cumsum(dte["spur-pmor"][:, 1]) * h
+    last = phi_2 > phi_2[-1] - 2 * math.pi / z2
+    means = {k: v[last, 2].mean() for k, v in dte.items()}
+    print(f"DTE mean over the last mesh cycle: PMOR-Hertz {means['spur-pmor'] * 1e6:.3f} µm, lumped {means['spur'] * 1e6:.3f} µm")
+    assert abs(means["spur"] / means["spur-pmor"] - 1.0) < 0.02
+    after = t > 8e-3
+    difference = (dte["spur-pmor"][:, 2] - dte["spur"][:, 2])[after]
+    power = np.abs(np.fft.rfft(difference - difference.mean())) ** 2
+    f = np.fft.rfftfreq(difference.size, h)
+    band = power[(f > 2e3) & (f < 4.2e3)].sum() / power[1:].sum()
+    print(f"difference after 8 ms: RMS {difference.std() * 1e6:.3f} µm; share of its power at 2–4.2 kHz {band:.3f}")
+    assert band > 0.7
