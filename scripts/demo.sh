@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo build --release --workspace
 mkdir -p out
-./target/release/fmu-build build examples/kurokawa_spur.toml -o out/KurokawaSpur.fmu
-./target/release/fmu-build build examples/kurokawa_spur.toml -o out/KurokawaSpurLumped.fmu --model lumped
+# Both FMUs from one build: the lumped FMU's mesh law is tabulated from the PMOR-Hertz build's statics.
+./target/release/fmu-build build examples/kurokawa_spur.toml -o out/KurokawaSpur.fmu --lumped-fmu out/KurokawaSpurLumped.fmu
 .venv/bin/python examples/drivetrain.py --fmu out/KurokawaSpur.fmu --png out/drivetrain.png
 .venv/bin/python scripts/example3.py out/KurokawaSpur.fmu out/KurokawaSpurLumped.fmu --png out/example3_dte.png

@@ -28,6 +28,8 @@ struct Fixture {
     place: PairPlacement,
     /// Static STE (m) of the PMOR-Hertz statics at 185 and 370 N·m, θ₂ = (k + ½)/40 pitch.
     statics: Vec<Vec<f64>>,
+    /// The lumped mesh law tabulated from the separately reduced statics (spur fixture only).
+    lumped_law: Option<(gearfmu::dynamics::mesh_law::MeshLaw, Vec<u32>)>,
 }
 
 const STATIC_TORQUES: [f64; 2] = [185.0, 370.0];
@@ -35,11 +37,11 @@ const STATIC_ANGLES: usize = 40;
 
 /// The reduced pair of an example spec on its own mesh, with the PMOR-Hertz statics of the same
 /// pair reduced separately (the reference: `fmu-build ste` with the ROM's depth and p_en).
-fn build_fixture(file: &str) -> Fixture {
+fn build_fixture(file: &str, lumped_mesh_law: bool) -> Fixture {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
     let spec = gearfmu::gear::PairSpec::load(&path).unwrap();
     let pair = gearfmu::gear::GearPair::from_spec(&spec).unwrap();
-    let options = DynamicBuildOptions::default();
+    let options = DynamicBuildOptions { lumped_mesh_law, ..Default::default() };
     let (model, report) = build_dynamic_model(&pair, &spec.mesh, &options, |_| {}).unwrap();
     let method = Method::PmorHertz { depth_m: options.depth_m, p_en: options.p_en, law: ApproachLaw::Weber };
     let reduced = ReducedPair::build(&pair, &spec.mesh, method, |_, _| {}).unwrap();
@@ -48,19 +50,24 @@ fn build_fixture(file: &str) -> Fixture {
         .map(|t| (0..STATIC_ANGLES).map(|k| cases[t * STATIC_ANGLES + k].as_ref().unwrap().ste_m).collect())
         .collect();
     let place = PairPlacement::new(&model.pair);
-    Fixture { model, report, place, statics }
+    let lumped_law = lumped_mesh_law.then(|| {
+        use gearfmu::rom::static_mesh_law::{drive_law_from_statics, force_levels, FORCE_LEVELS, TABLE_ROWS};
+        let statics = reduced.static_model().unwrap();
+        drive_law_from_statics(&pair, &statics, &force_levels(&pair, FORCE_LEVELS), TABLE_ROWS, |_| {}).unwrap()
+    });
+    Fixture { model, report, place, statics, lumped_law }
 }
 
 /// The default spur pair (`examples/kurokawa_spur.toml`, the default mesh): every test's.
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
-    F.get_or_init(|| build_fixture("kurokawa_spur.toml"))
+    F.get_or_init(|| build_fixture("kurokawa_spur.toml", true))
 }
 
 /// The helical pair on its spec's mesh (8 axial slices): the static limit's second pair.
 fn helical_fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
-    F.get_or_init(|| build_fixture("kurokawa_helical.toml"))
+    F.get_or_init(|| build_fixture("kurokawa_helical.toml", false))
 }
 
 fn base_radii(m: &PmorModel) -> [f64; 2] {
@@ -1105,4 +1112,18 @@ fn the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step() {
     }
     assert!(qs_step.stability_limit_s > 2.0 * full_step.stability_limit_s);
     assert!(qs_balance.abs() < 1e-4 && full_balance.abs() < 1e-4);
+}
+
+/// The lumped FMU's mesh law from the PMOR-Hertz build's own statics (`--lumped-fmu`, issue 26:
+/// no second reduction when both FMUs are built) is the law a lumped-only build tabulates from
+/// its own reduction (evidence: the same statics by two routes, `ReducedPair` and the dynamic
+/// build): equal to the last bit, force levels, deflections and tooth-pair counts.
+#[test]
+fn the_builds_lumped_mesh_law_is_the_one_a_separate_reduction_gives() {
+    let f = fixture();
+    let (from_build, pairs_from_build) = f.report.lumped_mesh_law.as_ref().expect("asked for by the fixture");
+    let (separate, pairs_separate) = f.lumped_law.as_ref().unwrap();
+    assert_eq!(from_build, separate);
+    assert_eq!(pairs_from_build, pairs_separate);
+    assert!(pairs_separate.contains(&1) && pairs_separate.contains(&2));
 }

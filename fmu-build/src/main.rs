@@ -178,6 +178,10 @@ enum Command {
         /// The lumped model's mesh law (with --model lumped; default fe).
         #[arg(long, value_enum)]
         mesh_law: Option<MeshLawChoice>,
+        /// With --model pmor-hertz: also write the lumped FMU of the same pair here, its mesh law
+        /// from this build's own FE statics (no second reduction).
+        #[arg(long)]
+        lumped_fmu: Option<PathBuf>,
         /// The FMU binary (cdylib); default: libgearfmu.so next to this executable.
         #[arg(long)]
         library: Option<PathBuf>,
@@ -523,13 +527,20 @@ fn build(
     output: &Path,
     model: ModelChoice,
     mesh_law: Option<MeshLawChoice>,
+    lumped_fmu: Option<&Path>,
     library: Option<PathBuf>,
     rom: &RomOptions,
     resolution: Resolution,
 ) -> Result<()> {
     check_output_folder(output)?;
+    if let Some(path) = lumped_fmu {
+        check_output_folder(path)?;
+    }
     if matches!(model, ModelChoice::PmorHertz) && mesh_law.is_some() {
         anyhow::bail!("--mesh-law chooses the lumped model's mesh law: give it with --model lumped");
+    }
+    if matches!(model, ModelChoice::Lumped) && lumped_fmu.is_some() {
+        anyhow::bail!("--lumped-fmu writes the lumped FMU beside a PMOR-Hertz build: give it with --model pmor-hertz");
     }
     let mesh_law = mesh_law.unwrap_or(MeshLawChoice::Fe);
     // The FE models' accuracy rests on the mesh: where the spec's [mesh] is silent it takes the
@@ -545,10 +556,24 @@ fn build(
     let so = std::fs::read(&library).with_context(|| {
         format!("cannot read the FMU binary {} (build it: cargo build --release -p gearfmu)", library.display())
     })?;
-    let kind = match model {
-        ModelChoice::Lumped => ModelKind::Lumped(lumped_mesh(&pair, &mesh_spec, mesh_law, rom.depth_mm)?),
-        ModelChoice::PmorHertz => ModelKind::PmorHertz(Box::new(build_rom(&pair, &mesh_spec, rom)?)),
-    };
+    match model {
+        ModelChoice::Lumped => {
+            write_fmu(output, &pair, ModelKind::Lumped(lumped_mesh(&pair, &mesh_spec, mesh_law, rom.depth_mm)?), &so)
+        }
+        ModelChoice::PmorHertz => {
+            let (rom_model, lumped) = build_rom(&pair, &mesh_spec, rom, lumped_fmu.is_some())?;
+            write_fmu(output, &pair, ModelKind::PmorHertz(Box::new(rom_model)), &so)?;
+            match (lumped_fmu, lumped) {
+                (Some(path), Some(mesh)) => write_fmu(path, &pair, ModelKind::Lumped(mesh), &so),
+                _ => Ok(()),
+            }
+        }
+    }
+}
+
+/// Packs one model into an .fmu: modelDescription.xml, the binary, the model file.
+fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Result<()> {
+    let pair = pair.clone();
     let guid = ModelFile::compute_guid(interface::VARIABLES_TOML, &pair.name, &kind);
     let (starts, description) = match &kind {
         ModelKind::Lumped(mesh) => (
@@ -607,7 +632,7 @@ fn build(
     zip.start_file("modelDescription.xml", options)?;
     zip.write_all(xml.as_bytes())?;
     zip.start_file(format!("binaries/linux64/{}.so", model_description::MODEL_IDENTIFIER), options)?;
-    zip.write_all(&so)?;
+    zip.write_all(so)?;
     zip.start_file(format!("resources/{}", gearfmu::model_file::FILE_NAME), options)?;
     zip.write_all(&file.to_bytes())?;
     zip.finish()?;
@@ -633,7 +658,8 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
     .map_err(anyhow::Error::msg)?;
     let reduction_s = started.elapsed().as_secs_f64();
     let levels = force_levels(pair, FORCE_LEVELS);
-    let (drive, pairs) = drive_law_from_statics(&reduced, &levels, TABLE_ROWS, |done| {
+    let statics = reduced.static_model().map_err(anyhow::Error::msg)?;
+    let (drive, pairs) = drive_law_from_statics(pair, &statics, &levels, TABLE_ROWS, |done| {
         bar.set_message(format!("mesh law from the FE statics: roll position {done} of {TABLE_ROWS}"))
     })
     .map_err(anyhow::Error::msg)?;
@@ -649,7 +675,12 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
 }
 
 /// The offline PMOR-Hertz build: FE models, eigenmodes, static contact shapes, invariants.
-fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearfmu::dynamics::pmor::model::PmorModel> {
+fn build_rom(
+    pair: &GearPair,
+    mesh: &MeshSpec,
+    rom: &RomOptions,
+    lumped_mesh_law: bool,
+) -> Result<(gearfmu::dynamics::pmor::model::PmorModel, Option<LumpedMesh>)> {
     use gearfmu::dynamics::pmor::integrator::Integrator;
     use gearfmu::dynamics::pmor::model::Interpolation;
     use gearfmu::dynamics::pmor::quasi_static::Condensation;
@@ -704,6 +735,7 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
             DynamicsChoice::QuasiStatic => Condensation::QuasiStatic,
             DynamicsChoice::Full => Condensation::None,
         },
+        lumped_mesh_law,
         ..Default::default()
     };
     let started = std::time::Instant::now();
@@ -753,7 +785,11 @@ fn build_rom(pair: &GearPair, mesh: &MeshSpec, rom: &RomOptions) -> Result<gearf
         report.step.max_step_s * 1e6
     );
     println!("offline build {:.1} s", started.elapsed().as_secs_f64());
-    Ok(model)
+    // The lumped FMU's law from the same statics: where the stage log above says it took its time.
+    let lumped = report.lumped_mesh_law.map(|(drive, pairs)| {
+        LumpedMesh::from_drive_law(pair, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, drive, pairs)
+    });
+    Ok((model, lumped))
 }
 
 fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, resolution: Resolution) -> Result<()> {
@@ -1140,8 +1176,8 @@ fn tooth_stiffness_command(spec: &Path, resolution: Resolution) -> Result<()> {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Build { spec, output, model, mesh_law, library, rom, resolution } => {
-            build(&spec, &output, model, mesh_law, library, &rom, resolution)
+        Command::Build { spec, output, model, mesh_law, lumped_fmu, library, rom, resolution } => {
+            build(&spec, &output, model, mesh_law, lumped_fmu.as_deref(), library, &rom, resolution)
         }
         Command::Inspect { spec, json, mesh_law, resolution } => inspect(&spec, json, mesh_law, resolution),
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),

@@ -59,6 +59,9 @@ pub struct DynamicBuildOptions {
     pub integrator: Integrator,
     /// Whether the FMU treats the contact shapes and the hub direction as quasi-static.
     pub condensation: Condensation,
+    /// Whether to tabulate the lumped model's mesh law from this build's statics too
+    /// (`rom::static_mesh_law`; no second reduction).
+    pub lumped_mesh_law: bool,
 }
 
 impl Default for DynamicBuildOptions {
@@ -86,6 +89,7 @@ impl Default for DynamicBuildOptions {
             // within 0.02 % of the full pair's (`pmor_dynamics`,
             // `the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step`).
             condensation: Condensation::QuasiStatic,
+            lumped_mesh_law: false,
         }
     }
 }
@@ -111,6 +115,8 @@ pub struct DynamicBuildReport {
     pub ste_m: Vec<Vec<f64>>,
     pub n_sv: [usize; 2],
     pub step: IntegratorStep,
+    /// The lumped model's drive-flank law and its tooth-pair counts, where asked for.
+    pub lumped_mesh_law: Option<(crate::dynamics::mesh_law::MeshLaw, Vec<u32>)>,
 }
 
 /// `f` applied to the reduced pair with the build's modal damping and integrator, no added
@@ -285,6 +291,13 @@ pub fn build_dynamic_model(
         .map(|&(t, s)| statics.solve(pitch2 * s as f64 / n_theta as f64, options.rom_torques_nm[t]))
         .collect::<Result<Vec<_>, String>>()?;
     let case = |t: usize, s: usize| &cases[t * (n_theta + 1) + s];
+    let lumped_mesh_law = if options.lumped_mesh_law {
+        use super::static_mesh_law::{drive_law_from_statics, force_levels, FORCE_LEVELS, TABLE_ROWS};
+        progress(format!("lumped mesh law: {TABLE_ROWS} roll positions × {FORCE_LEVELS} forces"));
+        Some(drive_law_from_statics(pair, &statics, &force_levels(pair, FORCE_LEVELS), TABLE_ROWS, |_| {})?)
+    } else {
+        None
+    };
 
     // The coast shapes: each gear's sample s loaded on its coast flanks is the drive statics of
     // the half-turned pose (`PairPlacement::half_turn_angles`), turned back onto the gear. Gear
@@ -585,6 +598,7 @@ pub fn build_dynamic_model(
     model.step_checked_torque_nm = step.torque_nm;
     let report = DynamicBuildReport {
         step,
+        lumped_mesh_law,
         modes_hz: report_modes.try_into().map_err(|_| "two gears")?,
         invariance_residual: invariance,
         polar_inertia_kgm2: inertia,

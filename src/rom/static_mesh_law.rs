@@ -17,8 +17,9 @@
 //! (`gear::rating`): the statics refuse a case beyond it, and the law continues past its last
 //! level with its last slope, where the FMU already logs the yield warning.
 
-use super::sweep::ReducedPair;
+use super::statics::StaticModel;
 use crate::dynamics::mesh_law::MeshLaw;
+use crate::gear::GearPair;
 use rayon::prelude::*;
 
 /// Roll positions per base pitch and force levels of the FE-fed law (chosen by measurement:
@@ -28,21 +29,21 @@ pub const FORCE_LEVELS: usize = 12;
 
 /// The force levels: F_k = F_top·(k/K)², F_top the smaller of 1500 N/mm of face width (the
 /// analytic law's top) and the yield force.
-pub fn force_levels(pair: &crate::gear::GearPair, levels: usize) -> Vec<f64> {
+pub fn force_levels(pair: &GearPair, levels: usize) -> Vec<f64> {
     let f_top = (1500.0e3 * pair.face_width_m).min(crate::gear::rating::yield_mesh_force_n(pair));
     (0..=levels).map(|k| f_top * (k as f64 / levels as f64).powi(2)).collect()
 }
 
-/// The drive flank's law from the statics of `reduced`: N rows × the levels, and the tooth pairs
-/// in contact at each (laid out as the law's deflections). `progress(done)` counts rows.
+/// The drive flank's law from the statics of a reduced pair (`ReducedPair::static_model`, or the
+/// PMOR-Hertz build's own): N rows × the levels, and the tooth pairs in contact at each (laid
+/// out as the law's deflections). `progress(done)` counts rows.
 pub fn drive_law_from_statics(
-    reduced: &ReducedPair,
+    pair: &GearPair,
+    model: &StaticModel,
     levels: &[f64],
     rows: usize,
     progress: impl Fn(usize) + Sync,
 ) -> Result<(MeshLaw, Vec<u32>), String> {
-    let pair = &reduced.pair;
-    let model = reduced.static_model()?;
     let (rb1, rb2) = (pair.gear1.base_radius_m, pair.gear2.base_radius_m);
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
     let roll_offset = pair.pitch_point_m() - pair.path_start_m;
