@@ -22,10 +22,13 @@ use crate::dynamics::mesh_law::MeshLaw;
 use crate::gear::GearPair;
 use rayon::prelude::*;
 
-/// Roll positions per base pitch and force levels of the FE-fed law (chosen by measurement:
-/// BENCHMARKS §5, the mesh law).
+/// Roll positions per base pitch and force levels of the FE-fed law, chosen by measurement
+/// (BENCHMARKS §9): against the statics at 200 positions and 22–700 N·m on the Kurokawa spur
+/// pair, 128 × 24 leaves the mean within 0.04 %, the peak-to-peak within 0.8 % and the pointwise
+/// RMS error at 0.6 % of the peak-to-peak; 12 levels leave the mean 0.6 % off at light load
+/// (the Hertz curve between quadratically spaced levels), 256 rows gain nothing at 12 levels.
 pub const TABLE_ROWS: usize = 128;
-pub const FORCE_LEVELS: usize = 12;
+pub const FORCE_LEVELS: usize = 24;
 
 /// The force levels: F_k = F_top·(k/K)², F_top the smaller of 1500 N/mm of face width (the
 /// analytic law's top) and the yield force.
