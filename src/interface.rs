@@ -26,6 +26,9 @@ pub struct Variable {
     #[serde(default)]
     pub start: Option<Start>,
     pub description: String,
+    /// Outputs: the inputs and parameters their value after initialization depends on.
+    #[serde(default)]
+    pub initial_depends_on: Option<Vec<String>>,
 }
 
 #[derive(Deserialize)]

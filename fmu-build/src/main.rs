@@ -643,7 +643,6 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
 /// The lumped model's mesh: from the FE statics (the reduction `ste` makes, then a table of
 /// static cases over roll × force; progress and cost reported) or from the geometry alone.
 fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: Option<f64>) -> Result<LumpedMesh> {
-    use gearfmu::dynamics::lumped::MeshLawSource;
     use gearfmu::rom::static_mesh_law::{drive_law_from_statics, force_levels, FORCE_LEVELS, TABLE_ROWS};
     if law == MeshLawChoice::Analytic {
         return LumpedMesh::from_pair(pair).map_err(anyhow::Error::msg);
@@ -659,19 +658,29 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
     let reduction_s = started.elapsed().as_secs_f64();
     let levels = force_levels(pair, FORCE_LEVELS);
     let statics = reduced.static_model().map_err(anyhow::Error::msg)?;
-    let (drive, pairs) = drive_law_from_statics(pair, &statics, &levels, TABLE_ROWS, |done| {
+    let table = drive_law_from_statics(pair, &statics, &levels, TABLE_ROWS, |done| {
         bar.set_message(format!("mesh law from the FE statics: roll position {done} of {TABLE_ROWS}"))
     })
     .map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
+    let kept = &table.law.force_levels_n;
     println!(
         "lumped mesh law from the PMOR-Hertz statics ({} elements across/along/rim): reduction {reduction_s:.1} s, \
-         {TABLE_ROWS} roll positions × {FORCE_LEVELS} forces up to {:.4e} N in {:.1} s",
+         {TABLE_ROWS} roll positions × {} forces up to {:.4e} N in {:.1} s",
         format_args!("{}/{}/{}", mesh.elements_across_tooth, mesh.elements_along_profile, mesh.elements_in_rim),
-        levels[levels.len() - 1],
+        kept.len() - 1,
+        kept[kept.len() - 1],
         started.elapsed().as_secs_f64() - reduction_s
     );
-    Ok(LumpedMesh::from_drive_law(pair, MeshLawSource::FeStatics, drive, pairs))
+    Ok(lumped_from_table(pair, table))
+}
+
+/// The lumped mesh around an FE-fed table; says where the statics ended it, if they did.
+fn lumped_from_table(pair: &GearPair, table: gearfmu::rom::static_mesh_law::StaticMeshLaw) -> LumpedMesh {
+    if let Some(why) = &table.capped {
+        println!("note: {why}; beyond it the law continues with its last slope");
+    }
+    LumpedMesh::from_drive_law(pair, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, table.law, table.pairs)
 }
 
 /// The offline PMOR-Hertz build: FE models, eigenmodes, static contact shapes, invariants.
@@ -786,16 +795,12 @@ fn build_rom(
     );
     println!("offline build {:.1} s", started.elapsed().as_secs_f64());
     // The lumped FMU's law from the same statics: where the stage log above says it took its time.
-    let lumped = report.lumped_mesh_law.map(|(drive, pairs)| {
-        LumpedMesh::from_drive_law(pair, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, drive, pairs)
-    });
+    let lumped = report.lumped_mesh_law.map(|table| lumped_from_table(pair, table));
     Ok((model, lumped))
 }
 
 fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, resolution: Resolution) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
-    let mesh = lumped_mesh(&pair, &mesh_spec, law, None)?;
-    let params = LumpedParameters::defaults(&mesh);
     let iso = iso6336::mesh_stiffness_c_gamma_alpha(&pair);
     let iso_total = iso6336::to_newton_per_metre(iso, pair.face_width_m);
     println!("pair {}: z {}/{}", pair.name, pair.gear1.teeth, pair.gear2.teeth);
@@ -807,7 +812,7 @@ fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, resolution: R
     );
     println!("  base pitch        {:.4} mm", pair.base_pitch_m * 1e3);
     println!("  contact ratios    ε_α {:.4}, ε_β {:.4}", pair.transverse_contact_ratio, pair.overlap_ratio);
-    println!("  inertias          {:.5} / {:.5} kg·m²", params.inertia_1_kgm2, params.inertia_2_kgm2);
+    println!("  inertias          {:.5} / {:.5} kg·m²", pair.gear1.inertia_kgm2, pair.gear2.inertia_kgm2);
     println!(
         "  torque on gear 1  operating {} N·m; rated {} N·m (nominal root stress at a third of the yield strength), yield {} N·m",
         sig(pair.operating_torque_nm),
@@ -815,6 +820,9 @@ fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, resolution: R
         sig(gearfmu::gear::rating::yield_torque_nm(&pair))
     );
     println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
+    // The geometry is printed; the mesh law takes its FE statics now (with `--mesh-law fe`).
+    let mesh = lumped_mesh(&pair, &mesh_spec, law, None)?;
+    let params = LumpedParameters::defaults(&mesh);
     for specific_load in [50.0, 100.0, 200.0, 400.0] {
         let force = specific_load * 1e3 * pair.face_width_m;
         let secant = mesh.drive.mean_secant_stiffness(force);

@@ -121,14 +121,41 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
         .unwrap();
     }
     writeln!(w, "  </ModelVariables>").unwrap();
+    // No output depends on an input directly (the torques act through a doStep's integration):
+    // dependencies="" (without it FMI 2.0 means "on every input", which makes masters report
+    // algebraic loops). At initialization each output lists what it is computed from
+    // (variables.toml's initial_depends_on), by index.
+    let index_of = |name: &str| -> Result<usize, String> {
+        variables.iter().position(|v| v.name == name).map(|i| i + 1).ok_or_else(|| format!("unknown variable {name}"))
+    };
     writeln!(w, "  <ModelStructure>").unwrap();
-    for section in ["Outputs", "InitialUnknowns"] {
-        writeln!(w, "    <{section}>").unwrap();
-        for i in &outputs {
-            writeln!(w, r#"      <Unknown index="{i}"/>"#).unwrap();
-        }
-        writeln!(w, "    </{section}>").unwrap();
+    writeln!(w, "    <Outputs>").unwrap();
+    for i in &outputs {
+        writeln!(w, r#"      <Unknown index="{i}" dependencies=""/>"#).unwrap();
     }
+    writeln!(w, "    </Outputs>").unwrap();
+    writeln!(w, "    <InitialUnknowns>").unwrap();
+    for &i in &outputs {
+        let v = &variables[i - 1];
+        let names = v.initial_depends_on.as_ref().ok_or_else(|| {
+            format!("output {}: variables.toml gives no initial_depends_on (what its initial value depends on)", v.name)
+        })?;
+        let mut indices = Vec::with_capacity(names.len());
+        for name in names {
+            let j = index_of(name).map_err(|e| format!("output {}: initial_depends_on: {e}", v.name))?;
+            if !matches!(variables[j - 1].causality.as_str(), "input" | "parameter") {
+                return Err(format!(
+                    "output {}: initial_depends_on lists {name}, neither an input nor a parameter",
+                    v.name
+                ));
+            }
+            indices.push(j);
+        }
+        indices.sort();
+        let list: Vec<String> = indices.iter().map(|j| j.to_string()).collect();
+        writeln!(w, r#"      <Unknown index="{i}" dependencies="{}"/>"#, list.join(" ")).unwrap();
+    }
+    writeln!(w, "    </InitialUnknowns>").unwrap();
     writeln!(w, "  </ModelStructure>").unwrap();
     writeln!(w, "</fmiModelDescription>").unwrap();
     Ok(x)
@@ -174,6 +201,44 @@ mod tests {
             vars.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i + 1).collect();
         assert_eq!(outputs, expected);
         assert_eq!(md.co_simulation.unwrap().model_identifier, MODEL_IDENTIFIER);
+    }
+
+    /// The ModelStructure read back by an independent parser (issue 29): no output depends on an
+    /// input during stepping (dependencies=""), nor in Initialization Mode, where the outputs
+    /// are those of the start values (parameters only: the C-API test
+    /// `outputs_do_not_follow_the_torques_until_a_step` checks the binary does as declared).
+    #[test]
+    fn model_structure_declares_no_direct_feedthrough_and_the_initial_dependencies() {
+        let text = xml();
+        let md: Fmi2ModelDescription = fmi_schema::deserialize(&text).unwrap();
+        let vars = &md.model_variables.variables;
+        let index = |name: &str| vars.iter().position(|v| v.name == name).unwrap() as u32 + 1;
+        let outputs = &md.model_structure.outputs.unknowns;
+        assert!(!outputs.is_empty());
+        // The parser reads an absent and an empty list alike; the attribute itself must be there
+        // (absent means "depends on every input").
+        let section = text.split("<Outputs>").nth(1).unwrap().split("</Outputs>").next().unwrap();
+        for u in outputs {
+            let declared = format!(r#"<Unknown index="{}" dependencies=""/>"#, u.index);
+            assert!(section.contains(&declared), "output {} must declare dependencies=\"\": {section}", u.index);
+        }
+        let initial = &md.model_structure.initial_unknowns.unknowns;
+        assert_eq!(initial.len(), outputs.len());
+        let deps =
+            |name: &str| -> Vec<u32> { initial.iter().find(|u| u.index == index(name)).unwrap().dependencies.clone() };
+        for u in initial {
+            assert!(!u.dependencies.is_empty(), "initial unknown {} lists what it depends on", u.index);
+            for &j in &u.dependencies {
+                let c = &vars[j as usize - 1].causality;
+                assert_eq!(*c, Causality::Parameter, "initial unknown {}: {j} is not a parameter", u.index);
+            }
+        }
+        for angle_like in ["phi_1", "phi_2", "dte", "mesh_force", "contact_pairs"] {
+            assert!(deps(angle_like).contains(&index("phi_1_start")), "{angle_like}");
+        }
+        for speed in ["w_1", "w_2"] {
+            assert!(deps(speed).contains(&index("w_2_start")), "{speed}");
+        }
     }
 
     #[test]

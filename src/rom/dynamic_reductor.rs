@@ -116,7 +116,7 @@ pub struct DynamicBuildReport {
     pub n_sv: [usize; 2],
     pub step: IntegratorStep,
     /// The lumped model's drive-flank law and its tooth-pair counts, where asked for.
-    pub lumped_mesh_law: Option<(crate::dynamics::mesh_law::MeshLaw, Vec<u32>)>,
+    pub lumped_mesh_law: Option<super::static_mesh_law::StaticMeshLaw>,
 }
 
 /// `f` applied to the reduced pair with the build's modal damping and integrator, no added

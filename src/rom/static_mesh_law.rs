@@ -40,13 +40,19 @@ pub fn force_levels(pair: &GearPair, levels: usize) -> Vec<f64> {
 /// The drive flank's law from the statics of a reduced pair (`ReducedPair::static_model`, or the
 /// PMOR-Hertz build's own): N rows × the levels, and the tooth pairs in contact at each (laid
 /// out as the law's deflections). `progress(done)` counts rows.
+///
+/// The statics refuse a case beyond their validity (the Hertz half-width rule, b ≤ h/4; a root
+/// past yield): a small pair reaches it below the top level. The table then ends at the highest
+/// level every roll position solves, and the law continues past it with its last slope; that
+/// level must cover twice the operating torque, else the build is refused with the statics'
+/// reason. `StaticMeshLaw::capped` says where and why it ended.
 pub fn drive_law_from_statics(
     pair: &GearPair,
     model: &StaticModel,
     levels: &[f64],
     rows: usize,
     progress: impl Fn(usize) + Sync,
-) -> Result<(MeshLaw, Vec<u32>), String> {
+) -> Result<StaticMeshLaw, String> {
     let (rb1, rb2) = (pair.gear1.base_radius_m, pair.gear2.base_radius_m);
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
     let roll_offset = pair.pitch_point_m() - pair.path_start_m;
@@ -64,40 +70,75 @@ pub fn drive_law_from_statics(
     if levels.len() < 2 {
         return Err("the mesh law needs a force level above zero".into());
     }
-    let table: Vec<Result<(Vec<f64>, Vec<u32>), String>> = (0..rows)
+    // Per roll position: the STE and the pairs in contact up the levels, until the statics refuse
+    // one (then that level and its reason).
+    let table: Vec<(Vec<f64>, Vec<u32>, Option<(usize, String)>)> = (0..rows)
         .into_par_iter()
         .map(|i| {
             let roll = pair.base_pitch_m * i as f64 / rows as f64;
-            let mut row = vec![0.0; levels.len()];
-            let mut pairs = vec![0; levels.len()];
-            for k in 1..levels.len() {
-                let (ste, n) = ste_at(roll, levels[k] * rb1)
-                    .map_err(|e| format!("mesh law from the statics, roll {roll:.4e} m, force {:.4e} N: {e}", levels[k]))?;
-                row[k] = ste;
-                pairs[k] = n as u32;
+            let (mut row, mut pairs) = (vec![0.0], vec![0]);
+            let mut refused = None;
+            for (k, &force) in levels.iter().enumerate().skip(1) {
+                match ste_at(roll, force * rb1) {
+                    Ok((ste, n)) => {
+                        row.push(ste);
+                        pairs.push(n as u32);
+                    }
+                    Err(e) => {
+                        refused = Some((k, format!("roll {roll:.4e} m, force {force:.4e} N: {e}")));
+                        break;
+                    }
+                }
             }
             // Under no load: the pairs the lightest load touches.
-            pairs[0] = pairs[1];
-            // F(δ) must be single-valued: the deflection grows with the force.
-            if let Some(k) = (1..levels.len()).find(|&k| !(row[k] > row[k - 1])) {
-                return Err(format!(
-                    "mesh law from the statics: at roll {roll:.4e} m the STE does not grow from {:.4e} N to {:.4e} N ({:.6e} → {:.6e} m)",
-                    levels[k - 1],
-                    levels[k],
-                    row[k - 1],
-                    row[k]
-                ));
-            }
+            pairs[0] = pairs.get(1).copied().unwrap_or(0);
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-            Ok((row, pairs))
+            (row, pairs, refused)
         })
         .collect();
-    let mut deflection = Vec::with_capacity(rows * levels.len());
-    let mut pairs = Vec::with_capacity(rows * levels.len());
-    for r in table {
-        let (row, n) = r?;
-        deflection.extend(row);
-        pairs.extend(n);
+    // The highest level every roll position reached, and the first refusal that set it.
+    let top = table.iter().map(|(row, _, _)| row.len() - 1).min().unwrap_or(0);
+    let capped =
+        table.iter().filter_map(|(_, _, r)| r.as_ref()).find(|(k, _)| *k == top + 1).map(|(_, why)| why.clone());
+    let operating_force = 2.0 * pair.operating_torque_nm / rb1;
+    if levels[top] < operating_force.min(levels[levels.len() - 1]) {
+        return Err(format!(
+            "mesh law from the statics: they refuse loads from {:.4e} N on, below twice the operating torque ({:.4e} N): {}",
+            levels[top + 1],
+            operating_force,
+            capped.unwrap_or_default()
+        ));
     }
-    Ok((MeshLaw::new(pair.base_pitch_m, levels.to_vec(), deflection), pairs))
+    let kept = &levels[..=top];
+    let mut deflection = Vec::with_capacity(rows * kept.len());
+    let mut pairs = Vec::with_capacity(rows * kept.len());
+    for (i, (row, n, _)) in table.into_iter().enumerate() {
+        // F(δ) must be single-valued: the deflection grows with the force.
+        if let Some(k) = (1..kept.len()).find(|&k| !(row[k] > row[k - 1])) {
+            return Err(format!(
+                "mesh law from the statics: at roll {:.4e} m the STE does not grow from {:.4e} N to {:.4e} N ({:.6e} → {:.6e} m)",
+                pair.base_pitch_m * i as f64 / rows as f64,
+                kept[k - 1],
+                kept[k],
+                row[k - 1],
+                row[k]
+            ));
+        }
+        deflection.extend_from_slice(&row[..kept.len()]);
+        pairs.extend_from_slice(&n[..kept.len()]);
+    }
+    Ok(StaticMeshLaw {
+        law: MeshLaw::new(pair.base_pitch_m, kept.to_vec(), deflection),
+        pairs,
+        capped: capped.map(|why| format!("the table ends at {:.4e} N, where the statics refuse: {why}", kept[top])),
+    })
+}
+
+/// The FE-fed law: the drive flank's table, its tooth-pair counts, and where the statics ended it
+/// below the planned top level (if they did).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StaticMeshLaw {
+    pub law: MeshLaw,
+    pub pairs: Vec<u32>,
+    pub capped: Option<String>,
 }

@@ -198,22 +198,48 @@ def test_analytic_mesh_law_against_iso_6336(name, tmp_path):
     _iso_guard(name, spec, mesh)
 
 
-def test_contact_stiffens_with_load(gear_case):
-    # Hertzian line contact in series with the (linear) teeth: the compliance per unit
-    # force falls as the load grows, so δ(F) is concave, F(δ) convex, and the tangent
-    # stiffness is at least the secant stiffness F/δ.
-    mesh = gear_case.mesh
+def _stiffens_with_load(mesh):
     levels = np.asarray(mesh["force_levels_n"])
+    concave = mesh["mesh_law"] == "analytic"
     for key in ("drive_deflection_m", "coast_deflection_m"):
         tangent = _segment_stiffness(mesh, key)
-        assert np.all(np.diff(tangent, axis=1) >= 0), key
-        secant = levels[1:] / np.asarray(mesh[key])[:, 1:]
-        assert np.all(tangent >= secant * (1 - 1e-12)), key
+        change = np.diff(tangent, axis=1) / tangent[:, :-1]
+        if concave:
+            # Hertzian line contact in series with the (linear) teeth: the compliance per unit
+            # force falls as the load grows, so δ(F) is concave, F(δ) convex, and the tangent
+            # stiffness is at least the secant stiffness F/δ.
+            assert np.all(change >= 0), key
+            secant = levels[1:] / np.asarray(mesh[key])[:, 1:]
+            assert np.all(tangent >= secant * (1 - 1e-12)), key
+        else:
+            # The FE statics: contact stiffens with load too, but where the loaded contact
+            # changes its geometry with the load (a second pair engaging, the tip corner's
+            # rounded edge) nothing makes each row's tangent monotone, and the statics settle
+            # the STE to 1e-6 of itself. Measured on the Kurokawa spur pair: 1 of 2944 segments
+            # softens, by 1.3e-4 (the top load, next to a contact change).
+            assert np.mean(change < 0) < 0.01, key
+            assert change.min() > -1e-3, (key, change.min())
     # Over the tabulated range the mean secant stiffness rises, but only by tens of
     # percent: the teeth, not the contact, dominate the compliance.
     mean_secant = levels[1:] / np.asarray(mesh["drive_deflection_m"])[:, 1:].mean(axis=0)
     assert np.all(np.diff(mean_secant) > 0)
     assert 1.02 < mean_secant[-1] / mean_secant[0] < 1.5, mean_secant[[0, -1]]
+
+
+def test_contact_stiffens_with_load(gear_case):
+    """The law the lumped FMUs carry (FE-fed)."""
+    _stiffens_with_load(gear_case.mesh)
+
+
+@pytest.mark.parametrize("name", ["spur", "helical"])
+def test_analytic_law_stiffens_with_load(name, tmp_path):
+    """The no-FE estimate: its structure (Hertz in series with linear teeth) makes it concave."""
+    import json
+    from conftest import GEAR_SPECS, REPO_ROOT, _fmu_build
+
+    dump = tmp_path / "analytic.json"
+    _fmu_build("inspect", str(REPO_ROOT / GEAR_SPECS[name][0]), "--mesh-law", "analytic", "--json", str(dump))
+    _stiffens_with_load(json.loads(dump.read_text()))
 
 
 def test_mesh_natural_frequency(gear_case):
