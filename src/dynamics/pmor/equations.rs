@@ -89,7 +89,8 @@ impl PmorGear {
         let rows = self.flank(flank);
         let n_k = self.modes();
         let (phi_part, shape_part) = out.split_at_mut(n_k);
-        combine3(dir, rows.phi_rows_of_node(node), phi_part);
+        phi_part.fill(0.0);
+        add_combined3(dir, rows.phi_rows_of_node(node), phi_part);
         shape_part.fill(0.0);
         for a in 0..4 {
             let w = st.weights.w[a];
@@ -116,18 +117,7 @@ fn dot3(rows: &[f64], x: &[f64]) -> [f64; 3] {
     s
 }
 
-/// out = Σ_c d_c·row_c over a node's three rows (3·n entries): one pass over out.
-#[inline]
-fn combine3(d: [f64; 3], rows: &[f64], out: &mut [f64]) {
-    let n = out.len();
-    let (r0, rest) = rows.split_at(n);
-    let (r1, r2) = rest.split_at(n);
-    for i in 0..n {
-        out[i] = d[0] * r0[i] + d[1] * r1[i] + d[2] * r2[i];
-    }
-}
-
-/// out += Σ_c d_c·row_c.
+/// out += Σ_c d_c·row_c over a node's three rows (3·n entries): one pass over out.
 #[inline]
 fn add_combined3(d: [f64; 3], rows: &[f64], out: &mut [f64]) {
     let n = out.len();
