@@ -410,7 +410,7 @@ fn unloaded_mesh_loses_contact_and_hits_the_back_flank() {
         } else {
             free += 1;
             free_force_max = free_force_max.max(m.force_n.abs());
-            assert_eq!(m.pairs_in_contact, 0);
+            assert_eq!(model.pairs_in_contact(&s), 0);
         }
     }
     println!("steps in drive contact {drive}, free flight {free}, coast contact {coast}");

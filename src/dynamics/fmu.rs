@@ -664,9 +664,7 @@ impl Model for GearPairFmu {
     fn get_integer(&self, s: &GearPairState, vr: u32) -> Result<i32, String> {
         match self.var(vr)? {
             Var::ContactPairs => match &self.physics {
-                Physics::Lumped(mesh) => {
-                    Ok(LumpedModel::new(mesh, s.params).mesh_state(&s.mech).pairs_in_contact as i32)
-                }
+                Physics::Lumped(mesh) => Ok(LumpedModel::new(mesh, s.params).pairs_in_contact(&s.mech) as i32),
                 Physics::PmorHertz { .. } => {
                     Ok(self.pmor_outputs(s)?.expect("PMOR-Hertz physics").0.contact.pairs_in_contact as i32)
                 }

@@ -203,7 +203,6 @@ pub struct MeshState {
     pub roll_force_n: f64,
     /// Stiffness of the flank in contact (0 if none).
     pub stiffness_n_per_m: f64,
-    pub pairs_in_contact: u32,
     /// Elastic energy V (J).
     pub potential_j: f64,
 }
@@ -263,7 +262,6 @@ impl<'a> LumpedModel<'a> {
             out.roll_force_n = law.roll_force_n;
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
-            out.pairs_in_contact = nearest(&m.drive, &m.drive_pairs, law.force_n, xi);
         } else if delta < -m.backlash_m {
             // The coast law is written for a positive closure −(δ + j); its force pushes back.
             let law = m.coast.evaluate(-(delta + m.backlash_m), xi);
@@ -272,9 +270,23 @@ impl<'a> LumpedModel<'a> {
             out.roll_force_n = law.roll_force_n;
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
-            out.pairs_in_contact = nearest(&m.coast, &m.coast_pairs, law.force_n, xi);
         }
         out
+    }
+
+    /// Tooth pairs in contact at a state (an output only: the step path does not read it), from
+    /// the table at the nearest roll position and force level of the flank that touches.
+    pub fn pairs_in_contact(&self, s: &LumpedState) -> u32 {
+        let m = self.mesh;
+        let mesh = self.mesh_state(s);
+        let xi = m.base_radius_1_m * s.theta_1 + m.roll_offset_m;
+        if mesh.transmission_error_m > 0.0 {
+            nearest(&m.drive, &m.drive_pairs, mesh.elastic_force_n, xi)
+        } else if mesh.transmission_error_m < -m.backlash_m {
+            nearest(&m.coast, &m.coast_pairs, -mesh.elastic_force_n, xi)
+        } else {
+            0
+        }
     }
 
     /// Time derivative of the state under shaft torques τ₁, τ₂ (N·m).
