@@ -452,7 +452,7 @@ struct SteOptions {
 fn ste_with_defaults(spec: &Path, o: SteOptions, resolution: Resolution, out: StePlots) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, Some(MeshSpec::dynamic_default()), o.depth_mm)?;
     let torque_nm = o.torque_nm.unwrap_or_else(|| vec![pair.operating_torque_nm]);
-    let depth_m = o.depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
+    let depth_m = contact_depth_or_default(&pair, o.depth_mm);
     let method = match o.method {
         StaticMethod::PmorHertz => Method::PmorHertz {
             depth_m,
@@ -640,6 +640,11 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
     Ok(())
 }
 
+/// The contact depth h (m): `--depth-mm` where given, else the pair's default (half the module).
+fn contact_depth_or_default(pair: &GearPair, depth_mm: Option<f64>) -> f64 {
+    depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(pair), |d| d * 1e-3)
+}
+
 /// The lumped model's mesh: from the FE statics (the reduction `ste` makes, then a table of
 /// static cases over roll × force; progress and cost reported) or from the geometry alone.
 fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: Option<f64>) -> Result<LumpedMesh> {
@@ -648,7 +653,7 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
         return LumpedMesh::from_pair(pair).map_err(anyhow::Error::msg);
     }
     let started = std::time::Instant::now();
-    let depth_m = depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(pair), |d| d * 1e-3);
+    let depth_m = contact_depth_or_default(pair, depth_mm);
     let method = Method::PmorHertz { depth_m, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
     let bar = spinner("mesh law from the FE statics: reducing both gears".into());
     let reduced = ReducedPair::build(pair, mesh, method, |gear, done| {
@@ -704,7 +709,7 @@ fn build_rom(
             sig(yield_torque)
         );
     }
-    let depth_m = rom.depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(pair), |d| d * 1e-3);
+    let depth_m = contact_depth_or_default(pair, rom.depth_mm);
     // Every spec value reaches the FMU or the build says why not.
     for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
         if gear.inertia_overridden {
@@ -915,7 +920,7 @@ fn pair_and_mesh_or(
     let pair = GearPair::from_spec(&spec)?;
     let mut mesh = spec.mesh;
     if !slices_set {
-        let depth_m = depth_mm.map_or_else(|| gearfmu::rom::reductor::contact_depth_m(&pair), |d| d * 1e-3);
+        let depth_m = contact_depth_or_default(&pair, depth_mm);
         mesh.axial_slices = mesh.axial_slices.max(MeshSpec::axial_slices_for(&pair, depth_m));
     }
     Ok((pair, mesh))
