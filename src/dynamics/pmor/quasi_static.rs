@@ -51,9 +51,28 @@ pub enum Condensation {
     QuasiStatic,
 }
 
-/// The hub direction is condensed when its free frequency exceeds this multiple of the highest
-/// retained fixed-interface body mode.
+/// Without a mesh-mode estimate (a model whose mean mesh stiffness is not yet known), the hub
+/// direction is condensed when its free frequency exceeds this multiple of the highest body mode.
 pub const HUB_CUTOFF: f64 = 1.5;
+
+/// The body modes above this multiple of the mesh mode's 2-DOF estimate √(k̄/m_e)/2π (FE
+/// inertias) are condensed with the fast coordinates: they carry no resonance a drivetrain
+/// excites — the mesh harmonics that reach them at speed put them far above their own
+/// quasi-static response only near resonance — yet bound the explicit step.
+pub const BODY_CUTOFF_PER_MESH_MODE: f64 = 3.0;
+
+/// The cut-off frequency (Hz) above which a body mode is quasi-static: `BODY_CUTOFF_PER_MESH_MODE`
+/// times the mesh mode's estimate, or none (infinite) before the build has measured k̄.
+pub fn body_cutoff_hz(model: &super::model::PmorModel) -> f64 {
+    let factor = std::env::var("GEARFMU_CUTOFF").ok().and_then(|v| v.parse().ok()).unwrap_or(BODY_CUTOFF_PER_MESH_MODE);
+    let inertia = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+    let k = model.mesh_stiffness_n_per_m;
+    if k > 0.0 && factor.is_finite() {
+        factor * (k / model.mesh_mass_kg(inertia)).sqrt() / (2.0 * std::f64::consts::PI)
+    } else {
+        f64::INFINITY
+    }
+}
 
 /// Newton's iterations on the fast coordinates before giving up.
 const NEWTON_ITERATIONS: usize = 40;
@@ -80,19 +99,25 @@ const NEWTON_FLOOR_J: f64 = 1e-24;
 /// of `pmor_dynamics` hold at it.
 const STEP_RELATIVE_DECREMENT: f64 = 1e-6;
 
-/// One gear's split of η_Φ into the slow part Q·ξ and the hub direction b̂.
+/// One gear's split of η_Φ into the slow part Q·ξ and the fast part F·z_Φ: the hub direction b̂
+/// (where the bore is light) and the body modes above the cut-off.
 #[derive(Debug, Clone)]
 pub struct GearSplit {
-    /// Whether the hub direction is condensed (else Q = I and η_b does not exist).
+    /// Whether the hub direction is condensed.
     pub hub: bool,
-    /// b = (Gx)ᵀMΦ and b̂ = b/|b| (n_k).
+    /// b = (Gx)ᵀMΦ (n_k).
     pub b: DVector<f64>,
-    pub b_hat: DVector<f64>,
     /// J (kg·m²): the FE body's polar inertia plus the added.
     pub inertia_kgm2: f64,
-    /// β = |b|/J: the bore's turn per unit of η_b (θ = φ − β·η_b).
-    pub beta: f64,
-    /// Q (n_k × n_ξ): orthonormal columns, the complement of b̂ (or the identity).
+    /// F (n_k × n_f): orthonormal columns, b̂ restricted to the retained modes (where the hub is
+    /// condensed) and the unit vectors of the condensed body modes.
+    pub fast_basis: DMatrix<f64>,
+    /// Fᵀb/J: the bore's turn per unit of the fast coordinates (θ = φ − bᵀ(Qξ + Fz)/J).
+    pub bore_turn: DVector<f64>,
+    /// FᵀΛF: the fast body coordinates' stiffness, diagonal (b̂ lies on the retained modes,
+    /// the condensed modes are unit vectors).
+    fast_stiffness: DVector<f64>,
+    /// Q (n_k × n_ξ): orthonormal columns, the complement of F.
     pub basis: DMatrix<f64>,
     /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
     pub xi_mass: DMatrix<f64>,
@@ -100,28 +125,59 @@ pub struct GearSplit {
     /// Whether that mass is the identity to round-off (Φ mass-normalized: measured ≤ 1e-14 on
     /// the example pairs), so the accelerations are the forces themselves.
     xi_mass_is_unit: bool,
-    /// The hub mode's free frequency (Hz) the choice was made on.
+    /// The hub mode's free frequency (Hz) among the retained modes, the choice was made on.
     pub hub_frequency_hz: f64,
+    /// The cut-off (Hz) and the body modes above it.
+    pub cutoff_hz: f64,
+    pub condensed_modes: usize,
 }
 
 impl GearSplit {
-    pub fn new(gear: &super::model::PmorGear, added_inertia_kgm2: f64) -> Result<Self, String> {
+    pub fn new(gear: &super::model::PmorGear, added_inertia_kgm2: f64, cutoff_hz: f64) -> Result<Self, String> {
         let n_k = gear.modes();
         let inertia = gear.polar_inertia_kgm2 + added_inertia_kgm2;
         let b = gear.gx_phi.clone();
-        let b_norm = b.norm();
-        let b_hat = &b / b_norm;
-        // The pencil (Λ, M − bbᵀ/J): its highest frequency is the hub mode where the bore is light.
+        let hz = |lambda: f64| lambda.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
+        let (low, high): (Vec<usize>, Vec<usize>) = (0..n_k).partition(|&j| hz(gear.eigenvalues[j]) <= cutoff_hz);
+        let embed = |cols: &DMatrix<f64>| {
+            let mut m = DMatrix::zeros(n_k, cols.ncols());
+            for (r, &j) in low.iter().enumerate() {
+                m.row_mut(j).copy_from(&cols.row(r));
+            }
+            m
+        };
+        // The mean-axis mass M_ΦΦ − bbᵀ/J and, on the retained modes, the pencil (Λ_L, its block):
+        // its highest frequency is the hub mode where the bore is light.
         let mass = &gear.phi_phi - &b * b.transpose() / inertia;
-        let l = mass.clone().cholesky().ok_or("the mean-axis mass M_ΦΦ − bbᵀ/J is not positive definite")?.l();
-        let l_inv = l.try_inverse().ok_or("singular mean-axis mass")?;
+        let n_l = low.len();
+        let mass_low = DMatrix::from_fn(n_l, n_l, |r, c| mass[(low[r], low[c])]);
+        let (hub_frequency_hz, body_top_hz) = if n_l == 0 {
+            (0.0, 0.0)
+        } else {
+            let l = mass_low.clone().cholesky().ok_or("the mean-axis mass M_ΦΦ − bbᵀ/J is not positive definite")?.l();
+            let l_inv = l.try_inverse().ok_or("singular mean-axis mass")?;
+            let lambda = DMatrix::from_diagonal(&DVector::from_iterator(n_l, low.iter().map(|&j| gear.eigenvalues[j])));
+            let a = &l_inv * lambda * l_inv.transpose();
+            let top = nalgebra::SymmetricEigen::new((&a + a.transpose()) * 0.5).eigenvalues.max();
+            (hz(top), low.iter().map(|&j| hz(gear.eigenvalues[j])).fold(0.0, f64::max))
+        };
+        let hub_threshold_hz = if cutoff_hz.is_finite() { cutoff_hz } else { HUB_CUTOFF * body_top_hz };
+        let b_low = DVector::from_iterator(n_l, low.iter().map(|&j| b[j]));
+        let hub = n_l > 1 && b_low.norm() > 0.0 && hub_frequency_hz > hub_threshold_hz;
+        let (basis, mut fast_basis) = if hub {
+            let b_hat = b_low.normalize();
+            (embed(&complement(&b_hat)), embed(&DMatrix::from_column_slice(n_l, 1, b_hat.as_slice())))
+        } else {
+            (embed(&DMatrix::identity(n_l, n_l)), DMatrix::zeros(n_k, 0))
+        };
+        for &j in &high {
+            let n_f = fast_basis.ncols();
+            fast_basis = fast_basis.insert_column(n_f, 0.0);
+            fast_basis[(j, n_f)] = 1.0;
+        }
         let lambda = DMatrix::from_diagonal(&DVector::from_column_slice(&gear.eigenvalues));
-        let a = &l_inv * lambda * l_inv.transpose();
-        let top = nalgebra::SymmetricEigen::new((&a + a.transpose()) * 0.5).eigenvalues.max();
-        let hub_frequency_hz = top.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
-        let body_top_hz = gear.eigenvalues.iter().cloned().fold(0.0, f64::max).sqrt() / (2.0 * std::f64::consts::PI);
-        let hub = n_k > 1 && hub_frequency_hz > HUB_CUTOFF * body_top_hz;
-        let basis = if hub { complement(&b_hat) } else { DMatrix::identity(n_k, n_k) };
+        let fast_stiffness = (fast_basis.transpose() * &lambda * &fast_basis).diagonal();
+        let bore_turn = fast_basis.transpose() * &b / inertia;
         let xi_mass = basis.transpose() * &mass * &basis;
         let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
         let n_x = xi_mass.nrows();
@@ -129,14 +185,17 @@ impl GearSplit {
         Ok(GearSplit {
             hub,
             b,
-            b_hat,
             inertia_kgm2: inertia,
-            beta: b_norm / inertia,
+            fast_basis,
+            bore_turn,
+            fast_stiffness,
             basis,
             xi_mass,
             xi_mass_factor,
             xi_mass_is_unit,
             hub_frequency_hz,
+            cutoff_hz,
+            condensed_modes: high.len(),
         })
     }
 
@@ -152,9 +211,14 @@ impl GearSplit {
         self.basis.ncols()
     }
 
-    /// Fast coordinates: η_b (where the hub is condensed) and η_Ψ.
+    /// Fast body coordinates: n_f (the hub direction and the condensed modes).
+    pub fn fast_body_size(&self) -> usize {
+        self.fast_basis.ncols()
+    }
+
+    /// Fast coordinates: the fast body coordinates and η_Ψ.
     pub fn fast_size(&self, shapes: usize) -> usize {
-        self.hub as usize + shapes
+        self.fast_body_size() + shapes
     }
 }
 
@@ -185,9 +249,10 @@ pub struct QuasiStatic {
 
 impl QuasiStatic {
     pub fn new(dynamics_model: &super::model::PmorModel, added_inertia_kgm2: [f64; 2]) -> Result<Self, String> {
+        let cutoff_hz = body_cutoff_hz(dynamics_model);
         let splits = [
-            GearSplit::new(&dynamics_model.gears[0], added_inertia_kgm2[0])?,
-            GearSplit::new(&dynamics_model.gears[1], added_inertia_kgm2[1])?,
+            GearSplit::new(&dynamics_model.gears[0], added_inertia_kgm2[0], cutoff_hz)?,
+            GearSplit::new(&dynamics_model.gears[1], added_inertia_kgm2[1], cutoff_hz)?,
         ];
         Ok(Self::from_splits(dynamics_model, splits))
     }
@@ -205,13 +270,70 @@ impl QuasiStatic {
     }
 }
 
+/// The elastic part D of Newton's matrix on the fast coordinates: block diagonal, per gear the
+/// fast body coordinates' FᵀΛF (diagonal: b̂ lies on the retained modes, the condensed modes are
+/// unit vectors) and the shapes' K_Ψ. The contact adds one rank-one term k_s·g_s g_sᵀ per loaded
+/// section; Newton's matrix is solved in that structure (`FastTangent::solve`).
+struct FastTangent {
+    /// (index in z, stiffness) of every fast body coordinate.
+    body: Vec<(usize, f64)>,
+    /// (offset in z, Cholesky factor of K_Ψ) per gear with shapes.
+    shapes: Vec<(usize, nalgebra::Cholesky<f64, nalgebra::Dyn>)>,
+}
+
+impl FastTangent {
+    /// v ← D⁻¹v.
+    fn apply_elastic_inverse(&self, v: &mut DVector<f64>) {
+        for &(k, d) in &self.body {
+            v[k] /= d;
+        }
+        for (offset, factor) in &self.shapes {
+            let n = factor.l_dirty().nrows();
+            let mut part = v.rows(*offset, n).clone_owned();
+            factor.solve_mut(&mut part);
+            v.rows_mut(*offset, n).copy_from(&part);
+        }
+    }
+
+    /// Δz = (D + Σ_s k_s·g_s g_sᵀ)⁻¹·r by the Woodbury identity: with u = D⁻¹r and W = D⁻¹G,
+    /// Δz = u − W·(K_s⁻¹ + GᵀW)⁻¹·Gᵀu — blockwise solves and one n_s × n_s system (n_s the loaded
+    /// sections, ≤ 10 or so) instead of a dense factorization of order n_z (≈ 30 with condensed
+    /// body modes).
+    fn solve(&self, residual: &DVector<f64>, rows: &[DVector<f64>], stiffness: &[f64]) -> Result<DVector<f64>, String> {
+        let mut u = residual.clone();
+        self.apply_elastic_inverse(&mut u);
+        let n_s = rows.len();
+        if n_s == 0 {
+            return Ok(u);
+        }
+        let w: Vec<DVector<f64>> = rows
+            .iter()
+            .map(|g| {
+                let mut v = g.clone();
+                self.apply_elastic_inverse(&mut v);
+                v
+            })
+            .collect();
+        let capacitance = DMatrix::from_fn(n_s, n_s, |a, b| rows[a].dot(&w[b]) + if a == b { 1.0 / stiffness[a] } else { 0.0 });
+        let projected = DVector::from_fn(n_s, |a, _| rows[a].dot(&u));
+        let y = capacitance
+            .cholesky()
+            .ok_or("the quasi-static coordinates' stiffness is not positive definite")?
+            .solve(&projected);
+        for (w_s, y_s) in w.iter().zip(y.iter()) {
+            u.axpy(-y_s, w_s, 1.0);
+        }
+        Ok(u)
+    }
+}
+
 /// The forces at one (slow, fast) point.
 struct Evaluation {
     /// The force on the fast coordinates (zero at their equilibrium), both gears stacked.
     residual: DVector<f64>,
     /// Its tangent stiffness −∂residual/∂z (elastic and contact; the contact's angle terms
     /// left out: Newton's matrix needs to be close, not exact).
-    tangent: Option<DMatrix<f64>>,
+    tangent: Option<FastTangent>,
     /// What the slow forces' change with z is made of (with the tangent): per loaded section its
     /// row in the fast coordinates (the rows in the slow ones are `outputs.contact.sections`),
     /// and per gear K′_Ψη_Ψ.
@@ -237,15 +359,14 @@ impl<'a> PmorDynamics<'a> {
         let xi = DVector::from_column_slice(&y[l.q(i) + 1..l.q(i) + 1 + n_x]);
         let xi_dot = DVector::from_column_slice(&y[l.v(i) + 1..l.v(i) + 1 + n_x]);
         let mut eta_phi = &sp.basis * xi;
-        if sp.hub {
-            eta_phi.axpy(z[0], &sp.b_hat, 1.0);
-        }
+        let n_f = sp.fast_body_size();
+        eta_phi.gemv(1.0, &sp.fast_basis, &DVector::from_column_slice(&z[..n_f]), 1.0);
         let eta_phi_dot = &sp.basis * xi_dot;
         let theta = y[l.q(i)] - sp.b.dot(&eta_phi) / sp.inertia_kgm2;
         let theta_dot = y[l.v(i)] - sp.b.dot(&eta_phi_dot) / sp.inertia_kgm2;
         let mut eta = Vec::with_capacity(g.elastic_size());
         eta.extend_from_slice(eta_phi.as_slice());
-        eta.extend_from_slice(&z[sp.hub as usize..]);
+        eta.extend_from_slice(&z[n_f..]);
         let mut velocity = Vec::with_capacity(1 + g.modes());
         velocity.push(theta_dot);
         velocity.extend_from_slice(eta_phi_dot.as_slice());
@@ -289,7 +410,7 @@ impl<'a> PmorDynamics<'a> {
         )?;
         let n_z = [z[0].len(), z[1].len()];
         let mut residual = DVector::zeros(n_z[0] + n_z[1]);
-        let mut tangent_matrix = tangent.then(|| DMatrix::zeros(n_z[0] + n_z[1], n_z[0] + n_z[1]));
+        let mut tangent_matrix = tangent.then(|| FastTangent { body: Vec::new(), shapes: Vec::new() });
         let mut fast_rows = Vec::new();
         let mut shape_slope = [DVector::zeros(0), DVector::zeros(0)];
         let mut acceleration = vec![0.0; l.n_q[0] + l.n_q[1]];
@@ -330,25 +451,21 @@ impl<'a> PmorDynamics<'a> {
             out.damping_force[q] = d_theta;
             out.damping_force[q + 1..q + l.n_q[i]].copy_from_slice(to_xi(d_theta, &d_phi).as_slice());
             // The fast coordinates' residual: b̂ᵀf_Φ − β·f_θ on η_b, f_Ψ on η_Ψ.
-            let beta = sp.beta;
             let mut r = z_off;
-            if sp.hub {
-                residual[r] = sp.b_hat.dot(&f_phi) - beta * f_theta;
-                r += 1;
+            let n_f = sp.fast_body_size();
+            for c in 0..n_f {
+                residual[r + c] = sp.fast_basis.column(c).dot(&f_phi) - sp.bore_turn[c] * f_theta;
             }
+            r += n_f;
             for m in 0..n_t {
                 residual[r + m] = elastic_contact(1 + n_k + m) - k_psi_eta[m];
             }
             if let Some(t) = tangent_matrix.as_mut() {
-                let mut r = z_off;
-                if sp.hub {
-                    t[(r, r)] += (0..n_k).map(|j| g.eigenvalues[j] * sp.b_hat[j] * sp.b_hat[j]).sum::<f64>();
-                    r += 1;
-                }
-                for a in 0..n_t {
-                    for b in 0..n_t {
-                        t[(r + a, r + b)] += 0.5 * (terms.k_psi[(a, b)] + terms.k_psi[(b, a)]);
-                    }
+                t.body.extend((0..n_f).map(|a| (z_off + a, sp.fast_stiffness[a])));
+                if n_t > 0 {
+                    let k = DMatrix::from_fn(n_t, n_t, |a, b| 0.5 * (terms.k_psi[(a, b)] + terms.k_psi[(b, a)]));
+                    let factor = k.cholesky().ok_or("the contact shapes' stiffness K_Ψ is not positive definite")?;
+                    t.shapes.push((z_off + n_f, factor));
                 }
             }
             if tangent {
@@ -362,8 +479,8 @@ impl<'a> PmorDynamics<'a> {
                 + 0.5 * (0..n_k).map(|j| g.eigenvalues[j] * eta_phi[j] * eta_phi[j]).sum::<f64>();
             out.bore_theta[i] = *theta;
         }
-        if let Some(t) = tangent_matrix.as_mut() {
-            // Σ k_s·g gᵀ with g the section's approach row in the fast coordinates.
+        if tangent {
+            // The sections' rows g in the fast coordinates (Newton's Σ k_s·g gᵀ).
             for section in &contact.sections {
                 let mut row = DVector::zeros(n_z[0] + n_z[1]);
                 for i in 0..2 {
@@ -371,16 +488,15 @@ impl<'a> PmorDynamics<'a> {
                     let n_k = model.gears[i].modes();
                     let rows = &section.rows[i];
                     let mut r = if i == 0 { 0 } else { n_z[0] };
-                    if sp.hub {
-                        let beta = sp.beta;
-                        row[r] = (0..n_k).map(|j| sp.b_hat[j] * rows[1 + j]).sum::<f64>() - beta * rows[0];
+                    for c in 0..sp.fast_body_size() {
+                        let column = sp.fast_basis.column(c);
+                        row[r] = (0..n_k).map(|j| column[j] * rows[1 + j]).sum::<f64>() - sp.bore_turn[c] * rows[0];
                         r += 1;
                     }
                     for m in 0..model.gears[i].shapes {
                         row[r + m] = rows[1 + n_k + m];
                     }
                 }
-                t.ger(section.stiffness_n_per_m, &row, &row, 1.0);
                 fast_rows.push(row);
             }
         }
@@ -421,18 +537,18 @@ impl<'a> PmorDynamics<'a> {
                 }
             }
             let mut r = z_off;
-            if sp.hub {
+            let n_f = sp.fast_body_size();
+            for c in 0..n_f {
+                let column = sp.fast_basis.column(c);
                 for j in 0..n_k {
-                    f_phi[j] -= g.eigenvalues[j] * sp.b_hat[j] * dz[r];
+                    f_phi[j] -= g.eigenvalues[j] * column[j] * dz[r + c];
                 }
-                r += 1;
+                // The bore moves with the fast body coordinates: θ = φ − bᵀ(Qξ + Fz)/J.
+                e.outputs.bore_theta[i] -= sp.bore_turn[c] * dz[r + c];
             }
+            r += n_f;
             f_theta -= (0..g.shapes).map(|m| e.shape_slope[i][m] * dz[r + m]).sum::<f64>();
             let q = l.q(i);
-            if sp.hub {
-                // The bore moves with η_b: θ = φ − β·η_b.
-                e.outputs.bore_theta[i] -= sp.beta * dz[z_off];
-            }
             e.acceleration[q] += f_theta / sp.inertia_kgm2;
             let mut xi_acc = sp.basis.transpose() * (f_phi - &sp.b * (f_theta / sp.inertia_kgm2));
             sp.xi_acceleration(&mut xi_acc);
@@ -509,10 +625,8 @@ impl<'a> PmorDynamics<'a> {
         // Newton's step and decrement ΔzᵀKΔz = Δzᵀr at an evaluation.
         let newton = |e: &mut Evaluation| -> Result<(DVector<f64>, f64), String> {
             let k = e.tangent.take().expect("asked for");
-            let dz = k
-                .cholesky()
-                .ok_or("the quasi-static coordinates' stiffness is not positive definite")?
-                .solve(&e.residual);
+            let stiffness: Vec<f64> = e.outputs.contact.sections.iter().map(|s| s.stiffness_n_per_m).collect();
+            let dz = k.solve(&e.residual, &e.fast_rows, &stiffness)?;
             let decrement = dz.dot(&e.residual);
             Ok((dz, decrement))
         };
@@ -611,11 +725,8 @@ impl<'a> PmorDynamics<'a> {
             y[q + 1..q + l.n_q[i]].copy_from_slice((sp.basis.transpose() * &eta_phi).as_slice());
             y[v + 1..v + l.n_q[i]].copy_from_slice((sp.basis.transpose() * &eta_phi_dot).as_slice());
             let z = &mut fast[i];
-            let mut r = 0;
-            if sp.hub {
-                z[0] = sp.b_hat.dot(&eta_phi);
-                r = 1;
-            }
+            let r = sp.fast_body_size();
+            z[..r].copy_from_slice((sp.fast_basis.transpose() * &eta_phi).as_slice());
             z[r..].copy_from_slice(&s.eta[i][n_k..]);
         }
     }
