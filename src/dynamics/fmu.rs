@@ -283,7 +283,11 @@ impl LoadedPair {
         };
         let default_splits = match &physics {
             Physics::PmorHertz { model, .. } if model.condensation == Condensation::QuasiStatic => {
-                { let cutoff_hz = crate::dynamics::pmor::quasi_static::body_cutoff_hz(model); Some([GearSplit::new(&model.gears[0], 0.0, cutoff_hz)?, GearSplit::new(&model.gears[1], 0.0, cutoff_hz)?]) }
+                let cutoff_hz = crate::dynamics::pmor::quasi_static::body_cutoff_hz(model);
+                Some([
+                    GearSplit::new(&model.gears[0], 0.0, cutoff_hz)?,
+                    GearSplit::new(&model.gears[1], 0.0, cutoff_hz)?,
+                ])
             }
             _ => None,
         };

@@ -126,16 +126,29 @@ pub fn static_equilibrium(
 ) -> Result<(PmorState, f64), String> {
     let model = dynamics.model;
     let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
-    let mut s = model.initial_state([(rb[1] * theta2 + te_guess_m) / rb[0], theta2], [0.0; 2]);
-    let mut y = dynamics.pack(&s);
+    let torque2_start = -torque1_nm * rb[1] / rb[0];
+    // The start: the rigid pair at the guessed TE. Where that guess, all of it taken by the Hertz
+    // law at undeformed teeth, is beyond the law's range (a small pair: the half-width rule), the
+    // guess is halved until the start evaluates; Newton's steps do the rest.
+    let mut guess = te_guess_m;
+    let (mut s, mut y) = loop {
+        let s = model.initial_state([(rb[1] * theta2 + guess) / rb[0], theta2], [0.0; 2]);
+        let y = dynamics.pack(&s);
+        match dynamics.rhs(&y, s.anchor, [torque1_nm, torque2_start]) {
+            Ok(_) => break (s, y),
+            Err(e) if guess.abs() < 1e-3 * te_guess_m.abs() => return Err(e),
+            Err(_) => guess *= 0.5,
+        }
+    };
+    let anchor = s.anchor;
     let n = y.len() / 2 - 1;
     // Gear 2's angle coordinate (its mean axis where the model is condensed).
     let i_theta2 = dynamics.layout().q(1);
     // Unknowns: q without θ₂, then τ₂. Residuals: all n accelerations.
     let unknowns: Vec<usize> = (0..n).filter(|&k| k != i_theta2).collect();
-    let mut torque2 = -torque1_nm * rb[1] / rb[0];
+    let mut torque2 = torque2_start;
     let residual = |y: &[f64], torque2: f64| -> Result<DVector<f64>, String> {
-        let (dy, _) = dynamics.rhs(y, s.anchor, [torque1_nm, torque2])?;
+        let (dy, _) = dynamics.rhs(y, anchor, [torque1_nm, torque2])?;
         Ok(DVector::from_column_slice(&dy[n..2 * n]))
     };
     let scale = scales(&y[..n]);
