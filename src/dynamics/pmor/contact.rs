@@ -133,12 +133,30 @@ fn locate(
     })
 }
 
+/// The displacements u and ∂u/∂ϑ of the flank nodes one contact evaluation has read, for one
+/// gear and flank at one pose: neighbouring axial sections share a layer of nodes, so about a
+/// third of the reads repeat (a short list: a few dozen nodes per evaluation).
+#[derive(Default)]
+struct NodeDisplacements(Vec<(usize, [f64; 3], [f64; 3])>);
+
+impl NodeDisplacements {
+    fn get(&mut self, g: &super::model::PmorGear, flank: Flank, pose: &GearPose, node: usize) -> ([f64; 3], [f64; 3]) {
+        if let Some(&(_, u, du)) = self.0.iter().find(|(k, _, _)| *k == node) {
+            return (u, du);
+        }
+        let (u, du) = g.node_displacement(flank, &pose.stencil, node, pose.eta);
+        self.0.push((node, u, du));
+        (u, du)
+    }
+}
+
 fn elastic_approach(
     model: &PmorModel,
     i: usize,
     flank: Flank,
     pose: &GearPose,
     at: &Located,
+    mut cache: Option<&mut NodeDisplacements>,
 ) -> Result<ElasticApproach, String> {
     let g = &model.gears[i];
     let grid = &g.flank(flank).grid;
@@ -152,7 +170,10 @@ fn elastic_approach(
     let (mut u, mut du_dr, mut du_dtheta) = ([0.0; 3], [0.0; 3], [0.0; 3]);
     for (&(k, w), &(_, dw)) in shares.iter().zip(&slopes) {
         let n_k = grid.nodes[k].1;
-        let (u_k, du_k) = g.node_displacement(flank, &pose.stencil, k, pose.eta);
+        let (u_k, du_k) = match cache.as_deref_mut() {
+            Some(cache) => cache.get(g, flank, pose, k),
+            None => g.node_displacement(flank, &pose.stencil, k, pose.eta),
+        };
         for c in 0..3 {
             m[c] += w * n_k[c];
             dm[c] += dw * n_k[c];
@@ -193,7 +214,7 @@ fn penetration_at(
     };
     let mut alpha = at.c.rigid_penetration_m;
     for i in 0..2 {
-        alpha += elastic_approach(model, i, flank, poses[i], &at)?.value_m;
+        alpha += elastic_approach(model, i, flank, poses[i], &at, None)?.value_m;
     }
     Ok(Some((alpha, transverse_radius(&at.c))))
 }
@@ -286,6 +307,8 @@ pub fn contact_loads(
     let spur = p.base_helix_angle_rad == 0.0;
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
     for flank in Flank::BOTH {
+        // The flank nodes read at the poses themselves (not the tip corners' differences).
+        let mut nodes = [NodeDisplacements::default(), NodeDisplacements::default()];
         let searched = place.searched_angles(flank, theta);
         let reach: f64 =
             (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();
@@ -309,8 +332,8 @@ pub fn contact_loads(
                     continue; // a gap the deformation cannot close (most of the coast flanks)
                 }
                 let e = [
-                    elastic_approach(model, 0, flank, poses[0], &at)?,
-                    elastic_approach(model, 1, flank, poses[1], &at)?,
+                    elastic_approach(model, 0, flank, poses[0], &at, Some(&mut nodes[0]))?,
+                    elastic_approach(model, 1, flank, poses[1], &at, Some(&mut nodes[1]))?,
                 ];
                 let alpha = c.rigid_penetration_m + e[0].value_m + e[1].value_m;
                 if alpha <= 0.0 {
@@ -343,7 +366,10 @@ pub fn contact_loads(
                         Loading::Point => (e[i].shares.to_vec(), Some(e[i].normal)),
                     };
                     for &(k, w) in &band {
-                        g.basis_row(flank, &poses[i].stencil, k, normal.unwrap_or(grid.nodes[k].1), &mut tmp[i]);
+                        match normal {
+                            Some(n) => g.basis_row(flank, &poses[i].stencil, k, n, &mut tmp[i]),
+                            None => g.normal_basis_row(flank, &poses[i].stencil, k, &mut tmp[i]),
+                        }
                         for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
                             *f -= force * w * t;
                         }

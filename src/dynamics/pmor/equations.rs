@@ -101,6 +101,26 @@ impl PmorGear {
     }
 }
 
+impl PmorGear {
+    /// Row of the basis V = [Φ, Ψ] along node k's own flank normal: n_kᵀ·[Φ_k, Σₐ wₐ S_{a,k}]
+    /// (`basis_row` with dir = n_k, from the rows stored along the normals).
+    pub fn normal_basis_row(&self, flank: Flank, st: &Stencil, node: usize, out: &mut [f64]) {
+        let rows = self.flank(flank);
+        let n_k = self.modes();
+        let (phi_part, shape_part) = out.split_at_mut(n_k);
+        phi_part.copy_from_slice(rows.phi_normal_row(node));
+        shape_part.fill(0.0);
+        for a in 0..4 {
+            let w = st.weights.w[a];
+            if w != 0.0 {
+                for (o, r) in shape_part.iter_mut().zip(rows.shape_normal_row(st.a0 + a, node)) {
+                    *o += w * r;
+                }
+            }
+        }
+    }
+}
+
 /// The three rows (x, y, z) of a node, stored one after the other (3·n entries), each dotted
 /// with x: one pass over x, three independent sums.
 #[inline]

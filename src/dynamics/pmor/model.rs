@@ -97,6 +97,37 @@ pub struct FlankRows {
     /// The largest Frobenius norm of a node's 3 rows of Φ, and of a stored sample's: they bound
     /// every node's displacement by the size of η ([`PmorGear::flank_displacement_bound`]).
     pub largest_node_rows: [f64; 2],
+    /// The rows along each node's own flank normal, made from the above on first use (not
+    /// stored in the model file).
+    #[serde(skip)]
+    normal_rows: Derived<NormalRows>,
+}
+
+/// The basis rows along each node's flank normal, n_kᵀΦ_k and n_kᵀS_{a,k}: the Hertz band loads
+/// every node along its own normal, so its generalized force needs one row per node, not three.
+#[derive(Debug, Clone)]
+pub struct NormalRows {
+    /// nodes × n_k, node-major.
+    phi: Vec<f64>,
+    /// Per stored sample, nodes × n_t, node-major.
+    shapes: Vec<Vec<f64>>,
+}
+
+/// Data derived from a struct's stored fields, made once on first use: equal whenever the stored
+/// fields are, so it does not enter the comparison.
+#[derive(Debug, Clone)]
+pub struct Derived<T>(std::sync::OnceLock<T>);
+
+impl<T> Default for Derived<T> {
+    fn default() -> Self {
+        Derived(std::sync::OnceLock::new())
+    }
+}
+
+impl<T> PartialEq for Derived<T> {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 impl FlankRows {
@@ -110,7 +141,39 @@ impl FlankRows {
             phi_rows: phi.transpose(),
             shape_rows: shapes.iter().map(|s| s.transpose()).collect(),
             largest_node_rows,
+            normal_rows: Derived::default(),
         }
+    }
+
+    fn normal_rows(&self) -> &NormalRows {
+        self.normal_rows.0.get_or_init(|| {
+            let along_normal = |rows: &DMatrix<f64>| -> Vec<f64> {
+                let n = rows.nrows();
+                let mut out = Vec::with_capacity(n * self.grid.len());
+                for (k, (_, normal)) in self.grid.nodes.iter().enumerate() {
+                    let node = &rows.as_slice()[3 * k * n..3 * (k + 1) * n];
+                    out.extend(
+                        (0..n).map(|j| normal[0] * node[j] + normal[1] * node[n + j] + normal[2] * node[2 * n + j]),
+                    );
+                }
+                out
+            };
+            NormalRows { phi: along_normal(&self.phi_rows), shapes: self.shape_rows.iter().map(along_normal).collect() }
+        })
+    }
+
+    /// n_kᵀΦ_k at a node (n_k entries).
+    #[inline]
+    pub fn phi_normal_row(&self, node: usize) -> &[f64] {
+        let n = self.phi_rows.nrows();
+        &self.normal_rows().phi[node * n..(node + 1) * n]
+    }
+
+    /// n_kᵀS_{a,k} of stored sample a at a node (n_t entries).
+    #[inline]
+    pub fn shape_normal_row(&self, a: usize, node: usize) -> &[f64] {
+        let n = self.shape_rows[a].nrows();
+        &self.normal_rows().shapes[a][node * n..(node + 1) * n]
     }
 
     /// Row r = 3·node + c of Φ (n_k entries).
