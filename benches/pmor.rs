@@ -8,7 +8,8 @@
 //! the seed's example 3 (185 N·m haversine ramp 5 ms, viscous 20 N·m·s/rad on gear 2 fed back
 //! from the port's speed, 25 ms, communication step 0.1 ms) as wall time and real-time factor,
 //! each at its default max_step (0.6 of its integrator's limit from the linearization; lumped
-//! 1 µs); the condensed pair also with RK4 (`--integrator rk4`), the integrator baseline.
+//! 1 µs); the condensed pair also with RK4 (`--integrator rk4`), the integrator baseline, and
+//! without the body-mode cut-off (every body mode dynamic), the step's baseline.
 //!
 //! The reduced pair is built here with the default options (about 15 s), so the figures belong
 //! to the same model `fmu-build build` ships.
@@ -55,6 +56,15 @@ fn main() {
     let (dynamics, verlet_max_step) = at(Condensation::QuasiStatic, Integrator::Verlet);
     let (rk4, rk4_max_step) = at(Condensation::QuasiStatic, Integrator::Rk4);
     let (full, full_max_step) = at(Condensation::None, Integrator::Verlet);
+    // The condensation before the body-mode cut-off: the shapes and the hub quasi-static, every
+    // body mode dynamic.
+    let (every_mode, every_mode_max_step) = {
+        let mut d = PmorDynamics::new(&model, &place, damping, [0.0; 2]);
+        d.set_quasi_static_cutoff(f64::INFINITY);
+        d.integrator = Integrator::Verlet;
+        let step = linear::default_step(&d).unwrap().max_step_s;
+        (d, step)
+    };
 
     // Example 3 through the model's own sub-stepping, as the FMU runs it.
     let example_3 = |dynamics: &PmorDynamics, max_step: f64, runs: usize| {
@@ -79,6 +89,7 @@ fn main() {
     let evaluations_per_solve = (counts_after.0 - counts_before.0) as f64 / (counts_after.1 - counts_before.1) as f64;
     let (rk4_wall, rk4_end) = example_3(&rk4, rk4_max_step, 3);
     let (full_wall, full_end) = example_3(&full, full_max_step, 3);
+    let (every_mode_wall, every_mode_end) = example_3(&every_mode, every_mode_max_step, 3);
 
     // Per right-hand side of the full pair, and per step of each, at the loaded state example 3
     // ends in.
@@ -113,6 +124,7 @@ fn main() {
     let verlet_step_us = step_us(&dynamics, &loaded, verlet_max_step);
     let rk4_step_us = step_us(&rk4, &rk4_end, rk4_max_step);
     let full_step_us = step_us(&full, &full_end, full_max_step);
+    let every_mode_step_us = step_us(&every_mode, &every_mode_end, every_mode_max_step);
 
     // The lumped model, same process, same loading.
     let mesh = LumpedMesh::from_pair(&pair).unwrap();
@@ -152,10 +164,16 @@ fn main() {
         full_max_step * 1e6
     );
     println!(
-        "quasi-static shapes and hub (the default): velocity Verlet step {verlet_step_us:.1} µs at its default {:.2} µs ({evaluations_per_solve:.2} contact evaluations per right-hand side in example 3); RK4 step {rk4_step_us:.1} µs at {:.2} µs; lumped RK4 step {:.3} µs",
+        "quasi-static shapes, hub and body modes above the cut-off (the default): velocity Verlet step {verlet_step_us:.1} µs at its default {:.2} µs ({evaluations_per_solve:.2} contact evaluations per right-hand side in example 3); RK4 step {rk4_step_us:.1} µs at {:.2} µs; lumped RK4 step {:.3} µs",
         verlet_max_step * 1e6,
         rk4_max_step * 1e6,
         lumped_step_us,
+    );
+    println!(
+        "quasi-static shapes and hub, every body mode dynamic (no cut-off): velocity Verlet step {every_mode_step_us:.1} µs at its default {:.2} µs; example 3 {every_mode_wall:.3} s (ratio to the default {:.2}), end DTE {:.4} µm",
+        every_mode_max_step * 1e6,
+        every_mode_wall / pmor_wall,
+        dte(&model, &every_mode_end) * 1e6
     );
     println!(
         "example 3 (25 ms, comm 0.1 ms), each at its default step: quasi-static {pmor_wall:.3} s wall ({:.2}× real time, {:.2} ms per doStep); full {full_wall:.3} s (ratio {:.2}); quasi-static RK4 {rk4_wall:.3} s (Verlet / RK4 {:.2}); lumped at 1 µs {:.2} ms (ratio {:.0})",

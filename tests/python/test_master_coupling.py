@@ -35,15 +35,16 @@ def ramp(t: float) -> float:
     return TORQUE_NM * (0.5 - 0.5 * math.cos(math.pi * t / RAMP_S) if t < RAMP_S else 1.0)
 
 
-def brake_run(slave: GearSlave, h: float) -> list[float]:
-    """Example 3 at communication step h; ω₂ at every step end."""
-    w_2, speeds = 0.0, []
+def brake_run(slave: GearSlave, h: float) -> tuple[list[float], list[float]]:
+    """Example 3 at communication step h; ω₂ and φ₂ at every step end."""
+    w_2, speeds, angles = 0.0, [], []
     for k in range(int(round(END_S / h))):
         slave.set_inputs(ramp(k * h), -BRAKE * w_2)
         slave.step(k * h, h)
-        w_2 = slave.fmu.getReal([slave.vr["w_2"]])[0]
+        w_2, phi_2 = slave.fmu.getReal([slave.vr["w_2"], slave.vr["phi_2"]])
         speeds.append(w_2)
-    return speeds
+        angles.append(phi_2)
+    return speeds, angles
 
 
 @pytest.mark.parametrize("zeta", [0.0, None], ids=["no-mesh-damper", "default"])
@@ -56,15 +57,19 @@ def test_example_3_brake_loop_completes_at_every_communication_step(gear_fmus, z
         slave = GearSlave(case, f"brake-{h_us}", parameters=params)
         z1, z2 = teeth(case)
         try:
-            speeds = brake_run(slave, h)
+            speeds, angles = brake_run(slave, h)
         except Exception as e:  # fmpy raises on fmi2Error
             failures.append(f"{h_us} µs: {e}")
             continue
         finally:
             slave.free()
-        last = speeds[-max(1, int(round(5e-3 / h))):]
-        mean, closed_form = sum(last) / len(last), TORQUE_NM * z2 / (z1 * BRAKE)
-        print(f"h = {h_us} µs: mean ω₂ {mean:.5f} rad/s, closed form {closed_form:.5f} ({mean / closed_form - 1:+.2e})")
+        # The mean over the last 5 ms is the angle travelled over them: at 1 ms the five speed
+        # samples alias the mesh mode's ringing (without a mesh damper ±2 rad/s at 3.6 kHz:
+        # their mean is 0.73 % low where the angle's is 0.26 %), which is not the mean.
+        n = max(1, int(round(5e-3 / h)))
+        mean, closed_form = (angles[-1] - angles[-1 - n]) / (n * h), TORQUE_NM * z2 / (z1 * BRAKE)
+        sampled = sum(speeds[-n:]) / n
+        print(f"h = {h_us} µs: mean ω₂ {mean:.5f} rad/s (of the samples {sampled:.5f}), closed form {closed_form:.5f} ({mean / closed_form - 1:+.2e})")
         if abs(mean / closed_form - 1.0) > 5e-3:
             failures.append(f"{h_us} µs: mean ω₂ {mean} against {closed_form}")
     assert not failures, failures

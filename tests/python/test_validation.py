@@ -46,12 +46,14 @@ def test_model_description_matches_contract(fmi_case):
     for name in ("tau_1", "tau_2"):
         assert float(variables[name].start) == 0.0
     # Per model kind: the lumped RK4 bound; the PMOR-Hertz model's own, 0.6 × its integrator's
-    # stability limit on the linearized pair (velocity Verlet: 1.4 µs for the default spur pair),
-    # so only its order is fixed here: microseconds, against the 57 kHz hub mode.
+    # stability limit on the linearized pair (velocity Verlet: 20 µs for the default spur pair),
+    # so only its range is fixed here: at least 5 µs (the step set by the retained physics, not
+    # by the 57 kHz hub mode or the body modes above the cut-off), at most 0.6 × Verlet's 2/ω of
+    # the retained mesh mode (3.0–3.8 kHz here: below 50 µs).
     if fmi_case.kind == "lumped":
         assert float(variables["max_step"].start) == pytest.approx(1e-5)
     else:
-        assert 1e-6 <= float(variables["max_step"].start) <= 1e-5
+        assert 5e-6 <= float(variables["max_step"].start) <= 5e-5
     # The spec's mounting.mesh_damping_ratio (0.05 in the Kurokawa specs) reaches both models.
     assert float(variables["mesh_damping_ratio"].start) == pytest.approx(0.05)
     # "default from geometry": the inertia start values are what inspect reports (the exact

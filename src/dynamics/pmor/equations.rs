@@ -247,6 +247,46 @@ pub fn shape_stiffness(gear: &PmorGear, st: &Stencil, k_psi: &mut DMatrix<f64>, 
     }
 }
 
+/// The sixteen K_ab (a, b = 0…3) of the interval whose stencil starts at stored sample `a0`,
+/// each n_t × n_t column-major, one after the other in (a, b) order, with K_ba = K_abᵀ written
+/// out: what [`shape_stiffness_of_interval`] reads (callers cache it per interval).
+pub fn interval_shape_stiffness(gear: &PmorGear, a0: usize) -> Vec<f64> {
+    let n_t = gear.shapes;
+    let mut block = Vec::with_capacity(16 * n_t * n_t);
+    for a in 0..4 {
+        for b in 0..4 {
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            let kab = &gear.pair_invariants(a0 + lo, a0 + hi).k_ss;
+            for c in 0..n_t {
+                for r in 0..n_t {
+                    block.push(if a <= b { kab[(r, c)] } else { kab[(c, r)] });
+                }
+            }
+        }
+    }
+    block
+}
+
+/// [`shape_stiffness`] from the interval's block ([`interval_shape_stiffness`]).
+pub fn shape_stiffness_of_interval(block: &[f64], st: &Stencil, k_psi: &mut DMatrix<f64>, dk_psi: &mut DMatrix<f64>) {
+    let n2 = k_psi.len();
+    let w = st.weights.w;
+    let dw = st.weights.dw.map(|x| x / st.step);
+    let (k, dk) = (k_psi.as_mut_slice(), dk_psi.as_mut_slice());
+    k.fill(0.0);
+    dk.fill(0.0);
+    for a in 0..4 {
+        for b in 0..4 {
+            let (f, df) = (w[a] * w[b], dw[a] * w[b] + w[a] * dw[b]);
+            let kab = &block[(4 * a + b) * n2..(4 * a + b + 1) * n2];
+            for ((k, dk), &v) in k.iter_mut().zip(dk.iter_mut()).zip(kab) {
+                *k += f * v;
+                *dk += df * v;
+            }
+        }
+    }
+}
+
 /// N = BᵀMB of the interval whose stencil starts at stored sample `a0`: the Gram matrix of
 /// [Gx | Φ | S_a], assembled from the stored invariants ((1 + n_k + 4n_t)²).
 pub fn interval_gram(gear: &PmorGear, a0: usize) -> DMatrix<f64> {

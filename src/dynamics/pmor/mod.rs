@@ -92,6 +92,8 @@ pub struct PmorDynamics<'a> {
     pub integrator: Integrator,
     /// The Gram matrix N of the interval last used, per gear (it changes only at samples).
     gram_cache: [RefCell<Option<(usize, Rc<DMatrix<f64>>)>>; 2],
+    /// The shapes' stiffness blocks of gear i's current interval (`equations::interval_shape_stiffness`).
+    shape_stiffness_cache: [RefCell<Option<(usize, Rc<Vec<f64>>)>>; 2],
     /// Each gear's terms, computed in place (no allocation per right-hand side).
     terms: [RefCell<GearTerms>; 2],
     /// The quasi-static condensation (`quasi_static`), where the model asks for it.
@@ -187,6 +189,7 @@ impl<'a> PmorDynamics<'a> {
             loading: Loading::HertzBand,
             integrator: model.integrator,
             gram_cache: Default::default(),
+            shape_stiffness_cache: Default::default(),
             terms: [0, 1].map(|i| RefCell::new(GearTerms::new(&model.gears[i]))),
             quasi_static: None,
             setup_error: None,
@@ -218,6 +221,16 @@ impl<'a> PmorDynamics<'a> {
         };
     }
 
+    /// The quasi-static condensation with another body-mode cut-off than the model's (Hz;
+    /// `f64::INFINITY` keeps every body mode dynamic): `quasi_static::QuasiStatic::with_cutoff`.
+    pub fn set_quasi_static_cutoff(&mut self, cutoff_hz: f64) {
+        (self.quasi_static, self.setup_error) =
+            match QuasiStatic::with_cutoff(self.model, self.added_inertia_kgm2, cutoff_hz) {
+                Ok(q) => (Some(q), None),
+                Err(e) => (None, Some(e)),
+            };
+    }
+
     /// The same pair (damping, inertias, loading, integrator) with another mesh damper (N·s/m):
     /// what the linearizations that vary the damper start from.
     pub fn with_mesh_damper(&self, mesh_damping_n_s_per_m: f64) -> PmorDynamics<'a> {
@@ -230,6 +243,19 @@ impl<'a> PmorDynamics<'a> {
         d.integrator = self.integrator;
         d.mesh_damping_n_s_per_m = mesh_damping_n_s_per_m;
         d
+    }
+
+    /// The K_ab blocks of gear i's interval starting at stored sample a0 (cached).
+    pub(crate) fn shape_stiffness_block(&self, i: usize, a0: usize) -> Rc<Vec<f64>> {
+        let mut cache = self.shape_stiffness_cache[i].borrow_mut();
+        match &*cache {
+            Some((a, block)) if *a == a0 => block.clone(),
+            _ => {
+                let block = Rc::new(equations::interval_shape_stiffness(&self.model.gears[i], a0));
+                *cache = Some((a0, block.clone()));
+                block
+            }
+        }
     }
 
     /// N of gear i's interval starting at stored sample a0 (cached).

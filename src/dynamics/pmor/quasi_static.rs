@@ -38,7 +38,7 @@
 //! the FE value) has a physical hub mode, which stays.
 
 use super::contact::{contact_loads, GearPose};
-use super::equations::shape_stiffness;
+use super::equations::shape_stiffness_of_interval;
 use super::{Layout, PmorDynamics, PmorOutputs, PmorState};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -129,6 +129,9 @@ pub struct GearSplit {
     fast_stiffness: DVector<f64>,
     /// Q (n_k × n_ξ): orthonormal columns, the complement of F.
     pub basis: DMatrix<f64>,
+    /// Q's nonzero entries (row, value) per column: Q is the identity on the retained modes but
+    /// for the Householder block of b̂'s few modes, so the step path reads it in O(n_k).
+    slow_columns: Vec<Vec<(usize, f64)>>,
     /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
     pub xi_mass: DMatrix<f64>,
     xi_mass_factor: nalgebra::Cholesky<f64, nalgebra::Dyn>,
@@ -191,6 +194,9 @@ impl GearSplit {
         let fast_columns = (0..fast_basis.ncols())
             .map(|c| (0..n_k).filter(|&j| fast_basis[(j, c)] != 0.0).map(|j| (j, fast_basis[(j, c)])).collect())
             .collect();
+        let slow_columns = (0..basis.ncols())
+            .map(|c| (0..n_k).filter(|&j| basis[(j, c)] != 0.0).map(|j| (j, basis[(j, c)])).collect())
+            .collect();
         let xi_mass = basis.transpose() * &mass * &basis;
         let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
         let n_x = xi_mass.nrows();
@@ -204,6 +210,7 @@ impl GearSplit {
             bore_turn,
             fast_stiffness,
             basis,
+            slow_columns,
             xi_mass,
             xi_mass_factor,
             xi_mass_is_unit,
@@ -216,6 +223,26 @@ impl GearSplit {
     /// (Fᵀv)_c.
     fn fast_dot(&self, c: usize, v: &[f64]) -> f64 {
         self.fast_columns[c].iter().map(|&(j, f)| f * v[j]).sum()
+    }
+
+    /// η += Q·ξ (n_k).
+    fn add_slow(&self, xi: &[f64], eta: &mut [f64]) {
+        for (column, &x) in self.slow_columns.iter().zip(xi) {
+            for &(j, q) in column {
+                eta[j] += q * x;
+            }
+        }
+    }
+
+    /// Qᵀ(f_Φ − b·f_θ/J): a force on (θ, η_Φ) on ξ.
+    fn force_on_slow(&self, f_theta: f64, f_phi: &[f64]) -> DVector<f64> {
+        let per_theta = f_theta / self.inertia_kgm2;
+        DVector::from_iterator(
+            self.slow_columns.len(),
+            self.slow_columns
+                .iter()
+                .map(|column| column.iter().map(|&(j, q)| q * (f_phi[j] - self.b[j] * per_theta)).sum()),
+        )
     }
 
     /// ξ̈ = M_ξ⁻¹·f_ξ, in place.
@@ -268,7 +295,16 @@ pub struct QuasiStatic {
 
 impl QuasiStatic {
     pub fn new(dynamics_model: &super::model::PmorModel, added_inertia_kgm2: [f64; 2]) -> Result<Self, String> {
-        let cutoff_hz = body_cutoff_hz(dynamics_model);
+        Self::with_cutoff(dynamics_model, added_inertia_kgm2, body_cutoff_hz(dynamics_model))
+    }
+
+    /// With another body-mode cut-off than the model's (Hz; infinite: every body mode dynamic,
+    /// the condensation before the cut-off): the baseline the benchmarks and tests compare with.
+    pub fn with_cutoff(
+        dynamics_model: &super::model::PmorModel,
+        added_inertia_kgm2: [f64; 2],
+        cutoff_hz: f64,
+    ) -> Result<Self, String> {
         let splits = [
             GearSplit::new(&dynamics_model.gears[0], added_inertia_kgm2[0], cutoff_hz)?,
             GearSplit::new(&dynamics_model.gears[1], added_inertia_kgm2[1], cutoff_hz)?,
@@ -376,24 +412,22 @@ impl<'a> PmorDynamics<'a> {
         let g = &self.model.gears[i];
         let sp = &qs.splits[i];
         let n_x = sp.slow_size();
-        let xi = DVector::from_column_slice(&y[l.q(i) + 1..l.q(i) + 1 + n_x]);
-        let xi_dot = DVector::from_column_slice(&y[l.v(i) + 1..l.v(i) + 1 + n_x]);
-        let mut eta_phi = &sp.basis * xi;
+        let n_k = g.modes();
+        let mut eta_phi = vec![0.0; n_k];
+        sp.add_slow(&y[l.q(i) + 1..l.q(i) + 1 + n_x], &mut eta_phi);
         let n_f = sp.fast_body_size();
         for (column, &z_c) in sp.fast_columns.iter().zip(&z[..n_f]) {
             for &(j, f) in column {
                 eta_phi[j] += f * z_c;
             }
         }
-        let eta_phi_dot = &sp.basis * xi_dot;
-        let theta = y[l.q(i)] - sp.b.dot(&eta_phi) / sp.inertia_kgm2;
-        let theta_dot = y[l.v(i)] - sp.b.dot(&eta_phi_dot) / sp.inertia_kgm2;
-        let mut eta = Vec::with_capacity(g.elastic_size());
-        eta.extend_from_slice(eta_phi.as_slice());
+        let dot_b = |v: &[f64]| sp.b.iter().zip(v).map(|(b, v)| b * v).sum::<f64>();
+        let theta = y[l.q(i)] - dot_b(&eta_phi) / sp.inertia_kgm2;
+        let mut velocity = vec![0.0; 1 + n_k];
+        sp.add_slow(&y[l.v(i) + 1..l.v(i) + 1 + n_x], &mut velocity[1..]);
+        velocity[0] = y[l.v(i)] - dot_b(&velocity[1..]) / sp.inertia_kgm2;
+        let mut eta = eta_phi;
         eta.extend_from_slice(&z[n_f..]);
-        let mut velocity = Vec::with_capacity(1 + g.modes());
-        velocity.push(theta_dot);
-        velocity.extend_from_slice(eta_phi_dot.as_slice());
         (eta, theta, velocity)
     }
 
@@ -452,7 +486,8 @@ impl<'a> PmorDynamics<'a> {
             let elastic_contact = |k: usize| contact.force[i][k] + contact.damping_force[i][k];
             let mut terms = self.terms[i].borrow_mut();
             let terms = &mut *terms;
-            shape_stiffness(g, &stencils[i], &mut terms.k_psi, &mut terms.dk_psi);
+            let block = self.shape_stiffness_block(i, stencils[i].a0);
+            shape_stiffness_of_interval(&block, &stencils[i], &mut terms.k_psi, &mut terms.dk_psi);
             let psi = DVector::from_column_slice(eta_psi);
             let k_psi_eta = &terms.k_psi * &psi;
             let f_theta = elastic_contact(0) + torques[i] - 0.5 * psi.dot(&(&terms.dk_psi * &psi));
@@ -466,7 +501,7 @@ impl<'a> PmorDynamics<'a> {
             let d_phi = DVector::from_fn(n_k, |j, _| contact.damping_force[i][1 + j] + modal[j]);
             dissipation += modal.iter().zip(eta_phi_dot).map(|(f, v)| f * v).sum::<f64>();
             // To the slow coordinates: on φ the θ force, on ξ Qᵀ(f_Φ − b·f_θ/J).
-            let to_xi = |f_t: f64, f_p: &DVector<f64>| sp.basis.transpose() * (f_p - &sp.b * (f_t / sp.inertia_kgm2));
+            let to_xi = |f_t: f64, f_p: &DVector<f64>| sp.force_on_slow(f_t, f_p.as_slice());
             let q = l.q(i);
             acceleration[q] = (f_theta - d_theta) / sp.inertia_kgm2;
             let mut xi_acc = to_xi(f_theta - d_theta, &(&f_phi - &d_phi));
@@ -572,7 +607,7 @@ impl<'a> PmorDynamics<'a> {
             f_theta -= (0..g.shapes).map(|m| e.shape_slope[i][m] * dz[r + m]).sum::<f64>();
             let q = l.q(i);
             e.acceleration[q] += f_theta / sp.inertia_kgm2;
-            let mut xi_acc = sp.basis.transpose() * (f_phi - &sp.b * (f_theta / sp.inertia_kgm2));
+            let mut xi_acc = sp.force_on_slow(f_theta, f_phi.as_slice());
             sp.xi_acceleration(&mut xi_acc);
             for (a, d) in e.acceleration[q + 1..q + l.n_q[i]].iter_mut().zip(xi_acc.iter()) {
                 *a += d;
