@@ -518,14 +518,15 @@ impl<'a> PmorDynamics<'a> {
 
     /// Advances by `duration` in steps of `self.integrator` no longer than `max_step`.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
-        let first = self.settle(s, torques)?;
+        // The settling to the new torques is a time step's solve too (its tolerance, its start
+        // from the last solve's tangent): a master changes the torques at every call.
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(true);
         }
-        let result = match self.integrator {
+        let result = self.settle(s, torques).and_then(|first| match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
             Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first),
-        };
+        });
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(false);
         }
