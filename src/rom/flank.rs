@@ -179,7 +179,15 @@ impl FlankGrid {
         // so the rows of the band's two ends bound them): one share per node.
         let first = self.row_of(r - dr).0;
         let span = self.row_of(r + dr).0 + 2 - first;
-        let mut row_weight = vec![0.0; span];
+        // On the stack where the band spans few rows (always, on the shipped meshes): the
+        // dynamics calls this for every loaded section and gear at every contact evaluation.
+        let (mut stack, mut heap) = ([0.0; 32], Vec::new());
+        let row_weight: &mut [f64] = if span <= stack.len() {
+            &mut stack[..span]
+        } else {
+            heap.resize(span, 0.0);
+            &mut heap
+        };
         // The nodes sin²(kπ/(P+1)) and abscissae cos(kπ/(P+1)), once per process: the contact
         // calls this for every loaded section and gear at every right-hand side.
         static QUADRATURE: std::sync::OnceLock<[(f64, f64); POINTS]> = std::sync::OnceLock::new();

@@ -136,10 +136,13 @@ fn locate(
 /// The displacements u and ∂u/∂ϑ of the flank nodes one contact evaluation has read, for one
 /// gear and flank at one pose: neighbouring axial sections share a layer of nodes, so about a
 /// third of the reads repeat (a short list: a few dozen nodes per evaluation).
-#[derive(Default)]
 struct NodeDisplacements(Vec<(usize, [f64; 3], [f64; 3])>);
 
 impl NodeDisplacements {
+    fn with_capacity(nodes: usize) -> Self {
+        NodeDisplacements(Vec::with_capacity(nodes))
+    }
+
     fn get(&mut self, g: &super::model::PmorGear, flank: Flank, pose: &GearPose, node: usize) -> ([f64; 3], [f64; 3]) {
         if let Some(&(_, u, du)) = self.0.iter().find(|(k, _, _)| *k == node) {
             return (u, du);
@@ -308,7 +311,7 @@ pub fn contact_loads(
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
     for flank in Flank::BOTH {
         // The flank nodes read at the poses themselves (not the tip corners' differences).
-        let mut nodes = [NodeDisplacements::default(), NodeDisplacements::default()];
+        let mut nodes = [NodeDisplacements::with_capacity(48), NodeDisplacements::with_capacity(48)];
         let searched = place.searched_angles(flank, theta);
         let reach: f64 =
             (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();

@@ -335,21 +335,32 @@ impl QuasiStatic {
 struct FastTangent {
     /// (index in z, stiffness) of every fast body coordinate.
     body: Vec<(usize, f64)>,
-    /// (offset in z, Cholesky factor of K_Ψ) per gear with shapes.
-    shapes: Vec<(usize, nalgebra::Cholesky<f64, nalgebra::Dyn>)>,
+    /// (offset in z, K_Ψ⁻¹) per gear with shapes (n_t × n_t, from its Cholesky factor).
+    shapes: Vec<(usize, DMatrix<f64>)>,
+    /// W = D⁻¹G and the Cholesky factor of K_s⁻¹ + GᵀW: what the Woodbury identity needs of
+    /// the matrix alone, made at the first solve and kept for the next (the next time step's
+    /// start, `Prediction`, solves with the same matrix).
+    woodbury: std::cell::OnceCell<(Vec<DVector<f64>>, nalgebra::Cholesky<f64, nalgebra::Dyn>)>,
 }
 
 impl FastTangent {
+    fn new() -> Self {
+        FastTangent { body: Vec::new(), shapes: Vec::new(), woodbury: std::cell::OnceCell::new() }
+    }
+
     /// v ← D⁻¹v.
-    fn apply_elastic_inverse(&self, v: &mut DVector<f64>) {
+    fn apply_elastic_inverse(&self, v: &mut [f64]) {
         for &(k, d) in &self.body {
             v[k] /= d;
         }
-        for (offset, factor) in &self.shapes {
-            let n = factor.l_dirty().nrows();
-            let mut part = v.rows(*offset, n).clone_owned();
-            factor.solve_mut(&mut part);
-            v.rows_mut(*offset, n).copy_from(&part);
+        for (offset, inverse) in &self.shapes {
+            let n = inverse.nrows();
+            let mut part = [0.0; 64];
+            let part = if n <= part.len() { &mut part[..n] } else { &mut vec![0.0; n][..] };
+            part.copy_from_slice(&v[*offset..*offset + n]);
+            for (r, out) in v[*offset..*offset + n].iter_mut().enumerate() {
+                *out = (0..n).map(|c| inverse[(r, c)] * part[c]).sum();
+            }
         }
     }
 
@@ -359,26 +370,29 @@ impl FastTangent {
     /// body modes).
     fn solve(&self, residual: &DVector<f64>, rows: &[DVector<f64>], stiffness: &[f64]) -> Result<DVector<f64>, String> {
         let mut u = residual.clone();
-        self.apply_elastic_inverse(&mut u);
+        self.apply_elastic_inverse(u.as_mut_slice());
         let n_s = rows.len();
         if n_s == 0 {
             return Ok(u);
         }
-        let w: Vec<DVector<f64>> = rows
-            .iter()
-            .map(|g| {
-                let mut v = g.clone();
-                self.apply_elastic_inverse(&mut v);
-                v
-            })
-            .collect();
-        let capacitance =
-            DMatrix::from_fn(n_s, n_s, |a, b| rows[a].dot(&w[b]) + if a == b { 1.0 / stiffness[a] } else { 0.0 });
+        if self.woodbury.get().is_none() {
+            let w: Vec<DVector<f64>> = rows
+                .iter()
+                .map(|g| {
+                    let mut v = g.clone();
+                    self.apply_elastic_inverse(v.as_mut_slice());
+                    v
+                })
+                .collect();
+            let capacitance =
+                DMatrix::from_fn(n_s, n_s, |a, b| rows[a].dot(&w[b]) + if a == b { 1.0 / stiffness[a] } else { 0.0 });
+            let factor =
+                capacitance.cholesky().ok_or("the quasi-static coordinates' stiffness is not positive definite")?;
+            let _ = self.woodbury.set((w, factor));
+        }
+        let (w, factor) = self.woodbury.get().expect("set above");
         let projected = DVector::from_fn(n_s, |a, _| rows[a].dot(&u));
-        let y = capacitance
-            .cholesky()
-            .ok_or("the quasi-static coordinates' stiffness is not positive definite")?
-            .solve(&projected);
+        let y = factor.solve(&projected);
         for (w_s, y_s) in w.iter().zip(y.iter()) {
             u.axpy(-y_s, w_s, 1.0);
         }
@@ -433,7 +447,8 @@ impl<'a> PmorDynamics<'a> {
         let sp = &qs.splits[i];
         let n_x = sp.slow_size();
         let n_k = g.modes();
-        let mut eta_phi = vec![0.0; n_k];
+        let mut eta_phi = Vec::with_capacity(g.elastic_size());
+        eta_phi.resize(n_k, 0.0);
         sp.add_slow(&y[l.q(i) + 1..l.q(i) + 1 + n_x], &mut eta_phi);
         let n_f = sp.fast_body_size();
         for (column, &z_c) in sp.fast_columns.iter().zip(&z[..n_f]) {
@@ -488,7 +503,7 @@ impl<'a> PmorDynamics<'a> {
         )?;
         let n_z = [z[0].len(), z[1].len()];
         let mut residual = DVector::zeros(n_z[0] + n_z[1]);
-        let mut tangent_matrix = tangent.then(|| FastTangent { body: Vec::new(), shapes: Vec::new() });
+        let mut tangent_matrix = tangent.then(FastTangent::new);
         let mut fast_rows = Vec::new();
         let mut shape_slope = [DVector::zeros(0), DVector::zeros(0)];
         let mut acceleration = vec![0.0; l.n_q[0] + l.n_q[1]];
@@ -544,7 +559,7 @@ impl<'a> PmorDynamics<'a> {
                 if n_t > 0 {
                     let k = DMatrix::from_fn(n_t, n_t, |a, b| 0.5 * (terms.k_psi[(a, b)] + terms.k_psi[(b, a)]));
                     let factor = k.cholesky().ok_or("the contact shapes' stiffness K_Ψ is not positive definite")?;
-                    t.shapes.push((z_off + n_f, factor));
+                    t.shapes.push((z_off + n_f, factor.inverse()));
                 }
             }
             if tangent {
