@@ -98,12 +98,14 @@ const NEWTON_FLOOR_J: f64 = 1e-24;
 /// evaluating the contact again, the slow forces moved along with it to first order
 /// (`shift_slow_forces`). What is left is Newton's own error after that step: the Jacobian's
 /// inexactness (the band rows, the angle terms left out; measured, each step shrinks |Δz| about
-/// a thousandfold) times |Δz|, ≈ 1e-6 of z. The secant start cannot do better than O(h) where
-/// the contact point crosses a node of the flank grid (the bilinear shares have kinks there):
-/// on example 3 its first decrement spreads from 1e-4 to 1e-9 of the potential. Measured on
-/// example 3 (default spur pair, 7.3 µs): 1.23 evaluations per solve at 1e-6 against 1.54 at
-/// 1e-8 and 1.80 at 1e-10, the DTE's mean and peak-to-peak the same to 1e-5; the energy tests
-/// of `pmor_dynamics` hold at it.
+/// a thousandfold) times |Δz|, ≈ 1e-6 of z. No start can do better than O(h) where the contact
+/// point crosses a node of the flank grid (the bilinear shares have kinks there): on example 3
+/// the first decrement spreads from 1e-4 to 1e-9 of the potential. Measured on example 3
+/// (default spur pair, every body mode dynamic, 7.3 µs, secant start): 1.23 evaluations per
+/// solve at 1e-6 against 1.54 at 1e-8 and 1.80 at 1e-10, the DTE's mean and peak-to-peak the
+/// same to 1e-5; with the cut-off at 20 µs, 1e-5 and 1e-4 save 4 and 7 % of the evaluations
+/// only. The energy tests of `pmor_dynamics` hold at it. The settling to new torques at the
+/// start of each `advance` uses it too (`Prediction` starts it from the last solve's tangent).
 const STEP_RELATIVE_DECREMENT: f64 = 1e-6;
 
 /// One gear's split of η_Φ into the slow part Q·ξ and the fast part F·z_Φ: the hub direction b̂
