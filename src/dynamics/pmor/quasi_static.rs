@@ -285,9 +285,6 @@ fn complement(u: &DVector<f64>) -> DMatrix<f64> {
 pub struct QuasiStatic {
     pub splits: [GearSplit; 2],
     fast: RefCell<[Vec<f64>; 2]>,
-    /// The last two solves' slow positions and fast coordinates (newest last): Newton's start
-    /// is the secant through them where no `prediction` is kept (the first solves of a run).
-    history: RefCell<Vec<(Vec<f64>, [Vec<f64>; 2])>>,
     /// The last solve's linearization, the next solve's start where it exists (`Prediction`).
     prediction: RefCell<Option<Prediction>>,
     /// Contact evaluations and solves so far (Newton's cost, for the benchmarks).
@@ -322,7 +319,6 @@ impl QuasiStatic {
         QuasiStatic {
             splits,
             fast: RefCell::new(fast),
-            history: RefCell::new(Vec::with_capacity(2)),
             prediction: RefCell::new(None),
             counts: Default::default(),
             stepping: Default::default(),
@@ -684,30 +680,11 @@ impl<'a> PmorDynamics<'a> {
             let n0 = z[0].len();
             z[0].iter_mut().enumerate().for_each(|(k, v)| *v += dz[k]);
             z[1].iter_mut().enumerate().for_each(|(k, v)| *v += dz[n0 + k]);
-        } else {
-            // The secant through the last two solves, at the projection of y on their chord.
-            let history = qs.history.borrow();
-            if let [(y0, z0), (y1, z1)] = &history[..] {
-                let (mut along, mut chord2) = (0.0, 0.0);
-                for k in 0..n_q {
-                    let d = y1[k] - y0[k];
-                    along += (positions[k] - y1[k]) * d;
-                    chord2 += d * d;
-                }
-                if chord2 > 0.0 {
-                    let t = (along / chord2).clamp(0.0, 2.0);
-                    for i in 0..2 {
-                        for k in 0..z[i].len() {
-                            z[i][k] = z1[i][k] + t * (z1[i][k] - z0[i][k]);
-                        }
-                    }
-                }
-            }
         }
         let mut e = match self.evaluate(qs, y, &z, anchor, torques, true) {
             Ok(e) => e,
             Err(_) => {
-                // The secant's extrapolation left the contact law's range: from the last
+                // The tangent's prediction left the contact law's range: from the last
                 // solution itself, and failing that (a pose far from it) from no deformation.
                 z = qs.fast.borrow().clone();
                 match self.evaluate(qs, y, &z, anchor, torques, true) {
@@ -719,14 +696,7 @@ impl<'a> PmorDynamics<'a> {
                 }
             }
         };
-        let keep = |z: [Vec<f64>; 2]| {
-            let mut history = qs.history.borrow_mut();
-            if history.len() == 2 {
-                history.remove(0);
-            }
-            history.push((positions.to_vec(), z.clone()));
-            *qs.fast.borrow_mut() = z;
-        };
+        let keep = |z: [Vec<f64>; 2]| *qs.fast.borrow_mut() = z;
         let shifted = |z: &[Vec<f64>; 2], dz: &DVector<f64>, t: f64| {
             let mut trial = z.clone();
             let n0 = trial[0].len();
@@ -856,7 +826,7 @@ impl<'a> PmorDynamics<'a> {
     pub(super) fn condensed_pack(&self, qs: &QuasiStatic, s: &PmorState, y: &mut [f64]) {
         let l = self.layout();
         let mut fast = qs.fast.borrow_mut();
-        qs.history.borrow_mut().clear(); // a state from outside: Newton starts from its own z
+        // A state from outside: Newton starts from its own z, not from the last solve's tangent.
         *qs.prediction.borrow_mut() = None;
         for i in 0..2 {
             let g = &self.model.gears[i];
