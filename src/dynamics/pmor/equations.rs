@@ -222,29 +222,7 @@ pub fn modal_damping_root(mass: &DMatrix<f64>, stiffness: &DMatrix<f64>) -> DMat
 /// K_Ψ(ϑ) = Σ wₐw_b K_ab, the shapes' stiffness interpolated at the stencil, and its
 /// ϑ-derivative, into `k_psi` and `dk_psi` (n_t × n_t).
 pub fn shape_stiffness(gear: &PmorGear, st: &Stencil, k_psi: &mut DMatrix<f64>, dk_psi: &mut DMatrix<f64>) {
-    let n_t = gear.shapes;
-    let w = st.weights.w;
-    let dw = st.weights.dw.map(|x| x / st.step);
-    k_psi.fill(0.0);
-    dk_psi.fill(0.0);
-    for a in 0..4 {
-        for b in 0..4 {
-            let (f, df) = (w[a] * w[b], dw[a] * w[b] + w[a] * dw[b]);
-            if f == 0.0 && df == 0.0 {
-                continue;
-            }
-            // K_ab is stored for a ≤ b; K_ba = K_abᵀ.
-            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-            let kab = &gear.pair_invariants(st.a0 + lo, st.a0 + hi).k_ss;
-            for r in 0..n_t {
-                for c in 0..n_t {
-                    let v = if a <= b { kab[(r, c)] } else { kab[(c, r)] };
-                    k_psi[(r, c)] += f * v;
-                    dk_psi[(r, c)] += df * v;
-                }
-            }
-        }
-    }
+    shape_stiffness_of_interval(&interval_shape_stiffness(gear, st.a0), st, k_psi, dk_psi);
 }
 
 /// The sixteen K_ab (a, b = 0…3) of the interval whose stencil starts at stored sample `a0`,

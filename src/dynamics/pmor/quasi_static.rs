@@ -193,12 +193,8 @@ impl GearSplit {
         let lambda = DMatrix::from_diagonal(&DVector::from_column_slice(&gear.eigenvalues));
         let fast_stiffness = (fast_basis.transpose() * &lambda * &fast_basis).diagonal();
         let bore_turn = fast_basis.transpose() * &b / inertia;
-        let fast_columns = (0..fast_basis.ncols())
-            .map(|c| (0..n_k).filter(|&j| fast_basis[(j, c)] != 0.0).map(|j| (j, fast_basis[(j, c)])).collect())
-            .collect();
-        let slow_columns = (0..basis.ncols())
-            .map(|c| (0..n_k).filter(|&j| basis[(j, c)] != 0.0).map(|j| (j, basis[(j, c)])).collect())
-            .collect();
+        let fast_columns = nonzero_columns(&fast_basis);
+        let slow_columns = nonzero_columns(&basis);
         let xi_mass = basis.transpose() * &mass * &basis;
         let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
         let n_x = xi_mass.nrows();
@@ -268,6 +264,11 @@ impl GearSplit {
     pub fn fast_size(&self, shapes: usize) -> usize {
         self.fast_body_size() + shapes
     }
+}
+
+/// A matrix's nonzero entries (row, value) per column.
+fn nonzero_columns(m: &DMatrix<f64>) -> Vec<Vec<(usize, f64)>> {
+    m.column_iter().map(|c| c.iter().enumerate().filter(|(_, v)| **v != 0.0).map(|(j, v)| (j, *v)).collect()).collect()
 }
 
 /// An orthonormal basis of the complement of the unit vector `u` (n × (n − 1)): the last
@@ -788,7 +789,8 @@ impl<'a> PmorDynamics<'a> {
             positions: positions.to_vec(),
             torques,
             tangent,
-            fast_rows: e.fast_rows.clone(),
+            // The rows are not read after the solve (`shift_slow_forces` ran before).
+            fast_rows: std::mem::take(&mut e.fast_rows),
             stiffness: sections.iter().map(|s| s.stiffness_n_per_m).collect(),
             slow_rows,
         });
