@@ -29,6 +29,10 @@ pub struct Variable {
     /// Outputs: the inputs and parameters their value after initialization depends on.
     #[serde(default)]
     pub initial_depends_on: Option<Vec<String>>,
+    /// Outputs: the inputs they depend on directly during stepping (none where omitted: the
+    /// value reaches the inputs only through a step's integration).
+    #[serde(default)]
+    pub depends_on: Option<Vec<String>>,
 }
 
 #[derive(Deserialize)]

@@ -15,4 +15,4 @@ pub mod model_file;
 pub mod rom;
 
 /// The model the exported fmi2 functions drive.
-pub type FmuModel = dynamics::fmu::GearPairFmu;
+pub type FmuModel = dynamics::any_model::AnyModel;

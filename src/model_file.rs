@@ -3,6 +3,7 @@
 //! body, then the body in postcard. A wrong magic, version or checksum is refused with a message
 //! that says which, so a stale or damaged FMU fails at instantiate, never later.
 
+use crate::dynamics::elements::Element;
 use crate::dynamics::lumped::LumpedMesh;
 use crate::dynamics::pmor::model::PmorModel;
 use serde::{Deserialize, Serialize};
@@ -13,6 +14,9 @@ pub const MAGIC: &[u8; 8] = b"GEARFMU\0";
 pub const FORMAT_VERSION: u32 = 13;
 pub const FILE_NAME: &str = "model.bin";
 
+/// `ModelKind::Element`'s place among the variants (postcard's variant index).
+const ELEMENT_VARIANT: u32 = 2;
+
 /// Which fidelity level the FMU carries.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ModelKind {
@@ -20,6 +24,15 @@ pub enum ModelKind {
     Lumped(LumpedMesh),
     /// The FE-based reduced pair in floating frames (`dynamics::pmor`).
     PmorHertz(Box<PmorModel>),
+    /// A drivetrain element: inertia, shaft, motor or load (`dynamics::elements`).
+    Element(Element),
+}
+
+impl ModelKind {
+    /// Whether this kind is a gear pair (the gear FMU's interface) or an element (its own).
+    pub fn is_gear_pair(&self) -> bool {
+        !matches!(self, ModelKind::Element(_))
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -58,6 +71,19 @@ impl ModelFile {
         postcard::from_bytes(body).map_err(|e| format!("model data file cannot be decoded: {e}"))
     }
 
+    /// Whether the file's model is a gear pair, read from the body's first fields only (no
+    /// checksum, no decoding of the model): which loader to hand the file to. The loader then
+    /// checks the whole file.
+    pub fn holds_gear_pair(bytes: &[u8]) -> Result<bool, String> {
+        if bytes.len() < 44 || &bytes[..8] != MAGIC {
+            return Err("model data file is not a gearfmu model file (bad magic)".into());
+        }
+        // postcard writes the fields in order and an enum's variant as a varint u32.
+        let (prefix, _): ((String, String, u32), _) =
+            postcard::take_from_bytes(&bytes[44..]).map_err(|e| format!("model data file cannot be decoded: {e}"))?;
+        Ok(prefix.2 != ELEMENT_VARIANT)
+    }
+
     pub fn read(resources: &Path) -> Result<ModelFile, String> {
         let path = resources.join(FILE_NAME);
         let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
@@ -73,5 +99,25 @@ impl ModelFile {
         let d = h.finalize();
         let hex: String = d.iter().take(16).map(|b| format!("{b:02x}")).collect();
         format!("{{{}-{}-{}-{}-{}}}", &hex[0..8], &hex[8..12], &hex[12..16], &hex[16..20], &hex[20..32])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The peek agrees with the full decode for every kind (the variant index it reads).
+    #[test]
+    fn the_kind_peek_agrees_with_the_decoded_kind() {
+        let element = Element::Shaft { stiffness_nm_per_rad: 1e4, damping_nms_per_rad: 1.0 };
+        let file = ModelFile { guid: "{g}".into(), pair_name: "shaft".into(), model: ModelKind::Element(element) };
+        let bytes = file.to_bytes();
+        assert!(!ModelFile::holds_gear_pair(&bytes).unwrap());
+        assert!(!ModelFile::from_bytes(&bytes).unwrap().model.is_gear_pair());
+        let spec = crate::gear::spec::PairSpec::from_toml(include_str!("../examples/small_spur.toml")).unwrap();
+        let pair = crate::gear::GearPair::from_spec(&spec).unwrap();
+        let mesh = crate::dynamics::lumped::LumpedMesh::from_pair(&pair).unwrap();
+        let file = ModelFile { guid: "{g}".into(), pair_name: "pair".into(), model: ModelKind::Lumped(mesh) };
+        assert!(ModelFile::holds_gear_pair(&file.to_bytes()).unwrap());
     }
 }

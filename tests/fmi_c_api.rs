@@ -386,7 +386,8 @@ fn instances_share_model_data_only_for_identical_bytes() {
     // White-box: the component is the instance; its model is one allocation for both.
     let physics = |c: fmi2Component| {
         let i = unsafe { &*(c as *const Instance<FmuModel>) };
-        &i.model.physics as *const _
+        let gearfmu::dynamics::any_model::AnyModel::GearPair(pair) = &i.model else { panic!("a gear pair FMU") };
+        &pair.physics as *const _
     };
     assert_eq!(physics(a), physics(b), "two instances of one model file decode it once");
     let mut damaged = good.clone();
@@ -747,6 +748,7 @@ fn a_state_from_another_fmu_is_refused() {
 /// instance keeps its previous state and recovers with a good one.
 #[test]
 fn restored_parameters_are_revalidated() {
+    use gearfmu::dynamics::any_model::AnyState;
     use gearfmu::dynamics::fmu::GearPairState;
     use gearfmu::fmi2::instance::{deserialize_snapshot, serialize_snapshot, Snapshot};
     let (_, guid) = resources();
@@ -756,16 +758,19 @@ fn restored_parameters_are_revalidated() {
     let good = state_of(c);
     let good_bytes = serialize(c, good);
     let outputs = OUTPUTS.map(|o| get(c, o));
-    let decoded: Snapshot<GearPairState> = deserialize_snapshot(&good_bytes, guid).unwrap();
-    type Edit = fn(&mut Snapshot<GearPairState>);
+    let decoded: Snapshot<AnyState> = deserialize_snapshot(&good_bytes, guid).unwrap();
+    type Edit = fn(&mut Snapshot<AnyState>);
+    fn pair(s: &mut Snapshot<AnyState>) -> &mut GearPairState {
+        s.state.gear_pair_mut().expect("a gear pair's state")
+    }
     let cases: [(Edit, &str); 8] = [
-        (|s| s.state.params.inertia_1_kgm2 = -1.0, "inertia_1 must be > 0, got -1"),
-        (|s| s.state.params.inertia_2_kgm2 = 0.0, "inertia_2 must be > 0, got 0"),
-        (|s| s.state.max_step_s = 0.0, "max_step must be a finite, positive, normal number of seconds, got 0e0"),
-        (|s| s.state.max_step_s = 1e-320, "max_step must be a finite, positive, normal number of seconds, got 1e-320"),
-        (|s| s.state.params.mesh_damping_ratio = 1.5, "mesh_damping_ratio must be in [0, 1), got 1.5"),
-        (|s| s.state.torques_nm[0] = f64::NAN, "tau_1/tau_2 holds a non-finite value NaN"),
-        (|s| s.state.mech.omega_1 = f64::INFINITY, "the lumped state holds a non-finite value inf"),
+        (|s| pair(s).params.inertia_1_kgm2 = -1.0, "inertia_1 must be > 0, got -1"),
+        (|s| pair(s).params.inertia_2_kgm2 = 0.0, "inertia_2 must be > 0, got 0"),
+        (|s| pair(s).max_step_s = 0.0, "max_step must be a finite, positive, normal number of seconds, got 0e0"),
+        (|s| pair(s).max_step_s = 1e-320, "max_step must be a finite, positive, normal number of seconds, got 1e-320"),
+        (|s| pair(s).params.mesh_damping_ratio = 1.5, "mesh_damping_ratio must be in [0, 1), got 1.5"),
+        (|s| pair(s).torques_nm[0] = f64::NAN, "tau_1/tau_2 holds a non-finite value NaN"),
+        (|s| pair(s).mech.omega_1 = f64::INFINITY, "the lumped state holds a non-finite value inf"),
         (|s| s.time = f64::NAN, "the FMU state's time NaN is not finite"),
     ];
     for (edit, reason) in cases {
@@ -825,14 +830,14 @@ fn a_max_step_beyond_the_stiffest_mode_is_refused_at_exit_initialization() {
 /// fmi2DoStep an error naming the balance's terms; the saved state brings the instance back.
 #[test]
 fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
-    use gearfmu::dynamics::fmu::GearPairState;
+    use gearfmu::dynamics::any_model::AnyState;
     use gearfmu::fmi2::instance::Snapshot;
     let name = "energy";
     let c = initialized(name, None);
     run(c, 0.0, 5, 1e-4);
     let good = state_of(c);
-    let mut forged: Snapshot<GearPairState> = unsafe { (*(good as *const Snapshot<GearPairState>)).clone() };
-    forged.state.mech.input_work_j -= 1e3;
+    let mut forged: Snapshot<AnyState> = unsafe { (*(good as *const Snapshot<AnyState>)).clone() };
+    forged.state.gear_pair_mut().expect("a gear pair's state").mech.input_work_j -= 1e3;
     let raw = Box::into_raw(Box::new(forged)) as fmi2FMUstate;
     assert_eq!(fmi2SetFMUstate(c, raw), OK, "a finite, valid state: only the balance can tell");
     assert_eq!(fmi2DoStep(c, 5e-4, 1e-4, 1), ERR);
@@ -877,7 +882,7 @@ fn soak_torques(phase: usize, local_s: f64, w2: f64) -> (f64, f64) {
 ///   drive phases start from different states and settle for 0.2 s only).
 #[test]
 fn soak_a_million_steps_through_drive_brake_free_flight_and_rattle() {
-    use gearfmu::dynamics::fmu::GearPairState;
+    use gearfmu::dynamics::any_model::AnyState;
     use gearfmu::dynamics::lumped::{LumpedModel, LumpedState};
     use gearfmu::fmi2::instance::Snapshot;
     let (dir, _) = resources();
@@ -907,9 +912,9 @@ fn soak_a_million_steps_through_drive_brake_free_flight_and_rattle() {
     let energy = |c: fmi2Component| -> (f64, f64, f64) {
         let mut state: fmi2FMUstate = std::ptr::null_mut();
         assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
-        let snapshot = unsafe { (*(state as *const Snapshot<GearPairState>)).clone() };
+        let snapshot = unsafe { (*(state as *const Snapshot<AnyState>)).clone() };
         assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut state) }, OK);
-        let s = snapshot.state;
+        let s = snapshot.state.into_gear_pair().expect("a gear pair's state");
         let model = LumpedModel::new(&mesh, s.params);
         let stored = |x: &LumpedState| model.kinetic_energy(x) + model.mesh_state(x).potential_j;
         let (start, now) = (stored(&s.start), stored(&s.mech));
@@ -1018,6 +1023,7 @@ fn pmor_resources() -> &'static (PathBuf, String) {
 #[test]
 fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     use gearfmu::contact::mesh_kinematics::PairPlacement;
+    use gearfmu::dynamics::any_model::AnyState;
     use gearfmu::dynamics::fmu::GearPairState;
     use gearfmu::dynamics::pmor::PmorDynamics;
     use gearfmu::fmi2::instance::Snapshot;
@@ -1042,9 +1048,9 @@ fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     let state_of = |c: fmi2Component| -> GearPairState {
         let mut state: fmi2FMUstate = std::ptr::null_mut();
         assert_eq!(unsafe { fmi2GetFMUstate(c, &mut state) }, OK);
-        let snapshot = unsafe { (*(state as *const Snapshot<GearPairState>)).clone() };
+        let snapshot = unsafe { (*(state as *const Snapshot<AnyState>)).clone() };
         assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut state) }, OK);
-        snapshot.state
+        snapshot.state.into_gear_pair().expect("a gear pair's state")
     };
     // Stored energy T + U + W of a state, with the instance's own inertia and damping.
     let stored = |s: &GearPairState| -> f64 {

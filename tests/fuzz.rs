@@ -203,7 +203,7 @@ fn lumped_mesh() -> &'static LumpedMesh {
     static M: OnceLock<LumpedMesh> = OnceLock::new();
     M.get_or_init(|| match ModelFile::from_bytes(&resources().model_bin).unwrap().model {
         ModelKind::Lumped(mesh) => mesh,
-        ModelKind::PmorHertz(_) => unreachable!("the fuzz FMU is lumped"),
+        ModelKind::PmorHertz(_) | ModelKind::Element(_) => unreachable!("the fuzz FMU is lumped"),
     })
 }
 
@@ -237,7 +237,7 @@ fn instantiate_from(name: &str, r: &Resources) -> fmi2Component {
 
 /// The instance's phase, read through the component pointer (white-box: the C API has no query).
 fn phase_of(c: fmi2Component) -> Phase {
-    unsafe { &*(c as *const Instance<GearPairFmu>) }.phase
+    unsafe { &*(c as *const Instance<gearfmu::FmuModel>) }.phase
 }
 
 const OK: fmi2Status = fmi2Status_fmi2OK;
@@ -748,7 +748,7 @@ fn status_is_valid(s: fmi2Status) -> bool {
 fn fuzz_state_decoder() {
     let r = resources();
     let original = serialized_state_of(r);
-    let real: Snapshot<GearPairState> = deserialize_snapshot(&original, &r.guid).unwrap();
+    let real = gear_snapshot(deserialize_snapshot(&original, &r.guid).unwrap()).unwrap();
     let forged = forged_state(real);
     state_decoder("state_decoder", r, original, forged, 500, |st, initialized| {
         prop_assert!(st.pmor.is_none());
@@ -770,7 +770,7 @@ fn fuzz_state_decoder() {
 fn fuzz_state_decoder_pmor_hertz() {
     let r = pmor_resources();
     let original = serialized_state_of(r);
-    let real: Snapshot<GearPairState> = deserialize_snapshot(&original, &r.guid).unwrap();
+    let real = gear_snapshot(deserialize_snapshot(&original, &r.guid).unwrap()).unwrap();
     let pmor = real.state.pmor.clone().expect("an initialized PMOR-Hertz state");
     let sizes = [pmor.eta[0].len(), pmor.eta[1].len()];
     // Either the FMI-level fields forged (the reduced pair's state as it was) or the reduced
@@ -879,9 +879,12 @@ fn state_decoder(
                 apply_bytes(&mut p, e);
                 seal_state(&state_guid, &p)
             }
-            StateCase::Forged(snapshot) => serialize_snapshot(snapshot, &guid).unwrap(),
+            StateCase::Forged(snapshot) => serialize_snapshot(&any_snapshot((**snapshot).clone()), &guid).unwrap(),
         };
-        let decoded = no_panic("deserialize_snapshot", &case, || deserialize_snapshot::<GearPairState>(&bytes, &guid))?;
+        let decoded = no_panic("deserialize_snapshot", &case, || {
+            deserialize_snapshot(&bytes, &guid)
+                .and_then(|s| gear_snapshot(s).ok_or_else(|| "an element's state, not a gear pair's".to_string()))
+        })?;
         if let (StateCase::Raw(_), Ok(_)) = (&case, &decoded) {
             prop_assert_eq!(&bytes, &original, "a raw edit passed the checksum");
         }
@@ -1452,7 +1455,7 @@ fn regression_pmor_outputs_without_contact_do_not_evaluate_it() {
 #[test]
 fn regression_restored_state_is_held_to_the_stability_contract() {
     let guid = resources().guid.clone();
-    let real: Snapshot<GearPairState> = deserialize_snapshot(&serialized_state_of(resources()), &guid).unwrap();
+    let real = gear_snapshot(deserialize_snapshot(&serialized_state_of(resources()), &guid).unwrap()).unwrap();
     let mut big_step = real.clone();
     big_step.state.max_step_s = 1e-3;
     let mut light = real.clone();
@@ -1462,7 +1465,7 @@ fn regression_restored_state_is_held_to_the_stability_contract() {
         for phase in [Phase::StepComplete, Phase::StepFailed, Phase::Terminated, Phase::Instantiated] {
             let mut forged = forged.clone();
             forged.phase = phase;
-            let bytes = serialize_snapshot(&forged, &guid).unwrap();
+            let bytes = serialize_snapshot(&any_snapshot(forged.clone()), &guid).unwrap();
             let name = unique_name("stability");
             let c = instantiate(&name);
             let mut s: fmi2FMUstate = std::ptr::null_mut();
@@ -1527,4 +1530,20 @@ fn regression_malformed_lumped_model_data_is_refused_at_instantiate() {
     assert!(c.is_null());
     let logs = take_logs(&name);
     assert!(logs.iter().any(|l| l.contains("fmi2Instantiate: the drive mesh law is malformed")), "{logs:?}");
+}
+
+/// A gear pair FMU's snapshot as its own state, and back (the binary's FMU state holds
+/// `AnyState`, the state of whichever model the FMU carries).
+fn gear_snapshot(
+    s: gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::any_model::AnyState>,
+) -> Option<gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::fmu::GearPairState>> {
+    let gearfmu::fmi2::instance::Snapshot { state, time, stop_time, phase } = s;
+    Some(gearfmu::fmi2::instance::Snapshot { state: state.into_gear_pair()?, time, stop_time, phase })
+}
+
+fn any_snapshot(
+    s: gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::fmu::GearPairState>,
+) -> gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::any_model::AnyState> {
+    let gearfmu::fmi2::instance::Snapshot { state, time, stop_time, phase } = s;
+    gearfmu::fmi2::instance::Snapshot { state: state.into(), time, stop_time, phase }
 }

@@ -5,7 +5,10 @@
 //! `fmu-build mesh examples/kurokawa_spur.toml [--vtk out/spur] [--png out/spur] [--across N --profile N --rim N --slices N]`
 //! `fmu-build modes examples/kurokawa_spur.toml -n 10 [--vtk out/spur]`
 //! `fmu-build tooth-stiffness examples/kurokawa_spur.toml [--across N --profile N --rim N --slices N]`
+//! `fmu-build element shaft -o Shaft.fmu --stiffness-nm-per-rad 2e4` (inertia, shaft, motor, load)
+//! `fmu-build ssp --gear-fmu KurokawaSpur.fmu -o drivetrain.ssp` (motor → shaft → gear pair → shaft → load)
 
+mod drivetrain;
 mod model_description;
 
 use anyhow::{Context, Result};
@@ -249,6 +252,37 @@ enum Command {
         /// Modes printed per position.
         #[arg(short = 'n', long, default_value_t = 4, value_parser = count::<0, 1000>)]
         count: usize,
+    },
+    /// A drivetrain element as an FMU (same FMI layer and binary as the gear pair): a rigid
+    /// inertia, a torsional shaft, a motor (torque ramp, optionally times a speed–torque curve)
+    /// or a load (inertia, viscous, quadratic and constant torques). MSL Rotational signs.
+    Element {
+        #[arg(value_enum)]
+        kind: drivetrain::ElementKind,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The modelName (default: the kind).
+        #[arg(long)]
+        name: Option<String>,
+        #[command(flatten)]
+        options: drivetrain::ElementOptions,
+        /// The FMU binary (cdylib); default: libgearfmu.so next to this executable.
+        #[arg(long)]
+        library: Option<PathBuf>,
+    },
+    /// The demo drivetrain as an SSP 1.0 archive: motor → shaft_1 → the gear FMU → shaft_2 →
+    /// load, its element FMUs built here, every parameter set inline; for libcosim
+    /// (CosimExecution.from_ssp_file), fmpy (fmpy.ssp) or any SSP master.
+    Ssp {
+        /// The gear-pair FMU to put in the middle.
+        #[arg(long)]
+        gear_fmu: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        options: drivetrain::DrivetrainOptions,
+        #[arg(long)]
+        library: Option<PathBuf>,
     },
     /// Static transmission error: gear 2 held at N angles over P pitches, torque T₁ on gear 1.
     Ste {
@@ -522,6 +556,17 @@ fn default_library() -> Result<PathBuf> {
     Ok(dir.join("libgearfmu.so"))
 }
 
+/// The FMU binary's bytes: `library`, else libgearfmu.so next to this executable.
+fn library_bytes(library: Option<PathBuf>) -> Result<Vec<u8>> {
+    let library = match library {
+        Some(l) => l,
+        None => default_library()?,
+    };
+    std::fs::read(&library).with_context(|| {
+        format!("cannot read the FMU binary {} (build it: cargo build --release -p gearfmu)", library.display())
+    })
+}
+
 fn build(
     spec: &Path,
     output: &Path,
@@ -549,13 +594,7 @@ fn build(
     let meshes = matches!(model, ModelChoice::PmorHertz) || mesh_law == MeshLawChoice::Fe;
     let fallback = meshes.then(MeshSpec::dynamic_default);
     let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback, rom.depth_mm)?;
-    let library = match library {
-        Some(l) => l,
-        None => default_library()?,
-    };
-    let so = std::fs::read(&library).with_context(|| {
-        format!("cannot read the FMU binary {} (build it: cargo build --release -p gearfmu)", library.display())
-    })?;
+    let so = library_bytes(library)?;
     match model {
         ModelChoice::Lumped => {
             write_fmu(output, &pair, ModelKind::Lumped(lumped_mesh(&pair, &mesh_spec, mesh_law, rom.depth_mm)?), &so)
@@ -595,6 +634,7 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
                 }
             ),
         ),
+        ModelKind::Element(_) => anyhow::bail!("a drivetrain element is written by `fmu-build element`"),
         ModelKind::PmorHertz(m) => (
             [
                 ("inertia_1", m.gears[0].polar_inertia_kgm2),
@@ -619,13 +659,17 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
             guid: &guid,
             description: &description,
             model_starts: &starts,
-            operating_torque_nm: pair.operating_torque_nm,
-            yield_torque_nm: gearfmu::gear::rating::yield_torque_nm(&pair),
+            operating_point_nm: Some((pair.operating_torque_nm, gearfmu::gear::rating::yield_torque_nm(&pair))),
+            default_step_s: 1e-5,
         },
     )
     .map_err(anyhow::Error::msg)?;
     let file = ModelFile { guid: guid.clone(), pair_name: pair.name.clone(), model: kind };
+    write_fmu_archive(output, &xml, &file, so)
+}
 
+/// The .fmu archive: modelDescription.xml, the binary and the model file.
+fn write_fmu_archive(output: &Path, xml: &str, file: &ModelFile, so: &[u8]) -> Result<()> {
     let out = std::fs::File::create(output).with_context(|| format!("cannot create {}", output.display()))?;
     let mut zip = zip::ZipWriter::new(out);
     let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
@@ -636,7 +680,7 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
     zip.start_file(format!("resources/{}", gearfmu::model_file::FILE_NAME), options)?;
     zip.write_all(&file.to_bytes())?;
     zip.finish()?;
-    println!("wrote {} (GUID {guid})", output.display());
+    println!("wrote {} (GUID {})", output.display(), file.guid);
     Ok(())
 }
 
@@ -1049,7 +1093,7 @@ fn linearize_command(
     // The instance's dynamics, as the FMU builds it (mesh damper included).
     let file =
         ModelFile { guid: String::new(), pair_name: model.pair.name.clone(), model: ModelKind::PmorHertz(model) };
-    let fmu_model = gearfmu::FmuModel::from_model_file(file).map_err(anyhow::Error::msg)?;
+    let fmu_model = gearfmu::dynamics::fmu::GearPairFmu::from_model_file(file).map_err(anyhow::Error::msg)?;
     let gearfmu::dynamics::fmu::Physics::PmorHertz { model, place } = &fmu_model.physics else { unreachable!() };
     let mut state = gearfmu::fmi2::Model::initial_state(&fmu_model);
     let torque_nm = torque_nm.unwrap_or(model.pair.operating_torque_nm);
@@ -1199,6 +1243,16 @@ fn main() {
         Command::Linearize { fmu, torque_nm, mesh_damping_ratio, positions, count } => {
             linearize_command(&fmu, torque_nm, mesh_damping_ratio, positions, count)
         }
+        Command::Element { kind, output, name, options, library } => (|| {
+            check_output_folder(&output)?;
+            let element = options.element(kind)?;
+            let name = name.unwrap_or_else(|| element.kind().to_string());
+            drivetrain::write_element_fmu(&output, &name, element, &library_bytes(library)?)
+        })(),
+        Command::Ssp { gear_fmu, output, options, library } => (|| {
+            check_output_folder(&output)?;
+            drivetrain::write_ssp(&output, &gear_fmu, &options, &library_bytes(library)?)
+        })(),
         Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => {
             let options = SteOptions { torque_nm, angles, pitches, method, depth_mm, p_en, eq20 };
             ste_with_defaults(&spec, options, resolution, StePlots { csv, png })

@@ -12,10 +12,12 @@ pub struct ModelFacts<'a> {
     pub description: &'a str,
     /// Start values for variables whose start is "model".
     pub model_starts: &'a [(&'a str, f64)],
-    /// The torque on gear 1 the model was built for and the one where a tooth root yields
+    /// A gear pair's torque on gear 1 it was built for and the one where a tooth root yields
     /// (N·m): written as the tool's vendor annotation, so a master or a sweep can default to it.
-    pub operating_torque_nm: f64,
-    pub yield_torque_nm: f64,
+    /// None for a drivetrain element.
+    pub operating_point_nm: Option<(f64, f64)>,
+    /// The DefaultExperiment's communication step (s).
+    pub default_step_s: f64,
 }
 
 pub const MODEL_IDENTIFIER: &str = "gearfmu";
@@ -28,6 +30,9 @@ fn escape(text: &str) -> String {
 fn base_units(unit: &str) -> &'static str {
     match unit {
         "N.m" => r#"kg="1" m="2" s="-2""#,
+        "N.m/rad" => r#"kg="1" m="2" s="-2" rad="-1""#,
+        "N.m.s/rad" => r#"kg="1" m="2" s="-1" rad="-1""#,
+        "N.m.s2/rad2" => r#"kg="1" m="2" rad="-2""#,
         "N" => r#"kg="1" m="1" s="-2""#,
         "N/m" => r#"kg="1" s="-2""#,
         "m" => r#"m="1""#,
@@ -70,14 +75,16 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
         writeln!(w, r#"    <Category name="{c}"/>"#).unwrap();
     }
     writeln!(w, "  </LogCategories>").unwrap();
-    writeln!(w, r#"  <DefaultExperiment startTime="0" stopTime="0.025" stepSize="1e-05"/>"#).unwrap();
+    writeln!(w, r#"  <DefaultExperiment startTime="0" stopTime="0.025" stepSize="{:?}"/>"#, facts.default_step_s)
+        .unwrap();
     // FMI 2.0's place for a tool's own data (§2.2.6): read by gearfmu.sweep for its defaults.
-    writeln!(
-        w,
-        r#"  <VendorAnnotations><Tool name="gearfmu"><OperatingPoint torque_1="{:?}" yield_torque_1="{:?}" unit="N.m"/></Tool></VendorAnnotations>"#,
-        facts.operating_torque_nm, facts.yield_torque_nm
-    )
-    .unwrap();
+    if let Some((operating, yielding)) = facts.operating_point_nm {
+        writeln!(
+            w,
+            r#"  <VendorAnnotations><Tool name="gearfmu"><OperatingPoint torque_1="{operating:?}" yield_torque_1="{yielding:?}" unit="N.m"/></Tool></VendorAnnotations>"#,
+        )
+        .unwrap();
+    }
     writeln!(w, "  <ModelVariables>").unwrap();
     let mut outputs = Vec::new();
     for (index, v) in variables.iter().enumerate() {
@@ -121,17 +128,29 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
         .unwrap();
     }
     writeln!(w, "  </ModelVariables>").unwrap();
-    // No output depends on an input directly (the torques act through a doStep's integration):
-    // dependencies="" (without it FMI 2.0 means "on every input", which makes masters report
-    // algebraic loops). At initialization each output lists what it is computed from
-    // (variables.toml's initial_depends_on), by index.
+    // An output depends directly only on the inputs its depends_on lists: none for the gear pair
+    // and the bodies (the torques act through a doStep's integration), dependencies="" (without
+    // it FMI 2.0 means "on every input", which makes masters report algebraic loops); the
+    // shaft's torques on its flanges' angles and speeds. At initialization each output lists
+    // what it is computed from (initial_depends_on), by index.
     let index_of = |name: &str| -> Result<usize, String> {
         variables.iter().position(|v| v.name == name).map(|i| i + 1).ok_or_else(|| format!("unknown variable {name}"))
     };
     writeln!(w, "  <ModelStructure>").unwrap();
     writeln!(w, "    <Outputs>").unwrap();
-    for i in &outputs {
-        writeln!(w, r#"      <Unknown index="{i}" dependencies=""/>"#).unwrap();
+    for &i in &outputs {
+        let v = &variables[i - 1];
+        let mut indices = Vec::new();
+        for name in v.depends_on.iter().flatten() {
+            let j = index_of(name).map_err(|e| format!("output {}: depends_on: {e}", v.name))?;
+            if variables[j - 1].causality != "input" {
+                return Err(format!("output {}: depends_on lists {name}, which is not an input", v.name));
+            }
+            indices.push(j);
+        }
+        indices.sort();
+        let list: Vec<String> = indices.iter().map(|j| j.to_string()).collect();
+        writeln!(w, r#"      <Unknown index="{i}" dependencies="{}"/>"#, list.join(" ")).unwrap();
     }
     writeln!(w, "    </Outputs>").unwrap();
     writeln!(w, "    <InitialUnknowns>").unwrap();
@@ -174,8 +193,8 @@ mod tests {
             guid: "{x}",
             description: "d",
             model_starts: &starts,
-            operating_torque_nm: 250.0,
-            yield_torque_nm: 1000.0,
+            operating_point_nm: Some((250.0, 1000.0)),
+            default_step_s: 1e-5,
         };
         write(gearfmu::interface::variables(), &facts).unwrap()
     }
@@ -248,8 +267,8 @@ mod tests {
             guid: "{x}",
             description: "d",
             model_starts: &[],
-            operating_torque_nm: 250.0,
-            yield_torque_nm: 1000.0,
+            operating_point_nm: Some((250.0, 1000.0)),
+            default_step_s: 1e-5,
         };
         let e = write(gearfmu::interface::variables(), &facts).unwrap_err();
         // The first variable whose start the model must give (in variables.toml order).

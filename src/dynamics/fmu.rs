@@ -252,6 +252,9 @@ impl LoadedPair {
                 let place = PairPlacement::new(&model.pair);
                 Physics::PmorHertz { model, place }
             }
+            ModelKind::Element(e) => {
+                return Err(format!("the model file holds a drivetrain {}, not a gear pair", e.kind()))
+            }
         };
         let mut lookup = Vec::new();
         for v in interface::variables() {

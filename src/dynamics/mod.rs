@@ -1,6 +1,8 @@
 //! Gear-pair dynamics: the fidelity levels (the lumped model, and the FE-based PMOR-Hertz reduced
 //! pair in `pmor`), each a `model_file::ModelKind`, and the FMU glue (`fmu`) that drives them.
 
+pub mod any_model;
+pub mod elements;
 pub mod fmu;
 pub mod iso6336;
 pub mod lumped;
