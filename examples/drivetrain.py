@@ -473,6 +473,80 @@ def cosimulate(fmu_path, params: DrivetrainParams, t_end: float, comm_step: floa
 
 
 # ---------------------------------------------------------------------------
+# The SSP system's coupling, its elements written out here
+# ---------------------------------------------------------------------------
+
+
+def substep_count(duration_s: float, max_step_s: float) -> int:
+    """⌈duration / max_step⌉, a quotient within 1e-9 of a whole number taken as that number
+    (the FMUs' rule, src/dynamics/mod.rs)."""
+    quotient = duration_s / max_step_s
+    nearest = round(quotient)
+    n = nearest if abs(quotient - nearest) <= 1e-9 * nearest else math.ceil(quotient)
+    return max(int(n), 1)
+
+
+def _rk4_body(phi, w, t0, h, max_step, accel):
+    """Classical RK4 on (φ, ω), ω̇ = accel(t, ω), over h in equal sub-steps ≤ max_step."""
+    n = substep_count(h, max_step)
+    dt = h / n
+    for k in range(n):
+        t = t0 + k * dt
+        k1p, k1w = w, accel(t, w)
+        k2p, k2w = w + 0.5 * dt * k1w, accel(t + 0.5 * dt, w + 0.5 * dt * k1w)
+        k3p, k3w = w + 0.5 * dt * k2w, accel(t + 0.5 * dt, w + 0.5 * dt * k2w)
+        k4p, k4w = w + dt * k3w, accel(t + dt, w + dt * k3w)
+        phi, w = phi + dt / 6.0 * (k1p + 2.0 * k2p + 2.0 * k3p + k4p), w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w)
+    return phi, w
+
+
+def element_cosimulation(fmu_path, params: DrivetrainParams, t_end: float, comm_step: float,
+                         max_step: float = 5e-5) -> dict:
+    """The drivetrain as the SSP system couples it (``fmu-build ssp``), with the motor, the load
+    and the two shafts written out here and only the gear pair an FMU.
+
+    Jacobi coupling, as libcosim and fmpy.ssp run the file: every component steps over
+    [t_n, t_n + H] from the values its inputs got at the end of the last step (all zero at the
+    start), then every output is passed on. A shaft is massless (MSL SpringDamper): its torques
+    are read from its inputs, so a torque reaches a body one step after the angles it is made
+    of. The bodies integrate J·ω̇ = Σ τ in RK4 sub-steps ≤ ``max_step``, the motor's ramp on the
+    time since the start. Speeds are returned after every step, keyed component.variable.
+    """
+    motor, load = params.motor, params.load
+    steps = int(round(t_end / comm_step))
+    gear_pair = FmuGearPair(fmu_path, t_end)
+    # The connectors (component.variable → value), all zero at the start.
+    c = {k: 0.0 for k in ("motor.phi", "motor.w", "load.phi", "load.w", "shaft_1.tau_a", "shaft_1.tau_b",
+                          "shaft_2.tau_a", "shaft_2.tau_b", "gear_pair.phi_1", "gear_pair.w_1",
+                          "gear_pair.phi_2", "gear_pair.w_2", "gear_pair.dte")}
+    keys = ("motor.w", "gear_pair.w_1", "gear_pair.w_2", "load.w", "gear_pair.dte")
+    record = {k: np.empty(steps) for k in keys}
+    m_phi = m_w = l_phi = l_w = 0.0
+    try:
+        for n in range(steps):
+            t = n * comm_step
+            # Each component from its inputs (the connections' values at t_n).
+            tau_motor, tau_load = c["shaft_1.tau_a"], c["shaft_2.tau_b"]
+            m_phi, m_w = _rk4_body(m_phi, m_w, t, comm_step, max_step,
+                                   lambda tt, w: (tau_motor + motor.torque_nm(tt)) / motor.inertia_kgm2)
+            l_phi, l_w = _rk4_body(l_phi, l_w, t, comm_step, max_step,
+                                   lambda tt, w: (tau_load - load.torque_nm(w)) / load.inertia_kgm2)
+            s1 = params.shaft_1.torque_nm(c["gear_pair.phi_1"] - c["motor.phi"], c["gear_pair.w_1"] - c["motor.w"])
+            s2 = params.shaft_2.torque_nm(c["load.phi"] - c["gear_pair.phi_2"], c["load.w"] - c["gear_pair.w_2"])
+            gear_pair.do_step(t, comm_step, c["shaft_1.tau_b"], c["shaft_2.tau_a"])
+            gear = gear_pair.outputs()
+            # Every output passed on.
+            c.update({"motor.phi": m_phi, "motor.w": m_w, "load.phi": l_phi, "load.w": l_w,
+                      "shaft_1.tau_a": s1, "shaft_1.tau_b": -s1, "shaft_2.tau_a": s2, "shaft_2.tau_b": -s2,
+                      **{f"gear_pair.{k}": gear[k] for k in ("phi_1", "w_1", "phi_2", "w_2", "dte")}})
+            for k in keys:
+                record[k][n] = c[k]
+    finally:
+        gear_pair.close()
+    return {"t": comm_step * np.arange(1, steps + 1), **record}
+
+
+# ---------------------------------------------------------------------------
 # Monolithic reference
 # ---------------------------------------------------------------------------
 

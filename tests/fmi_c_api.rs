@@ -1313,3 +1313,115 @@ fn outputs_do_not_follow_the_torques_until_a_step() {
         fmi2FreeInstance(c);
     }
 }
+
+/// A drivetrain element's resources folder (issue 29): its model file, GUID from elements.toml.
+fn element_resources(name: &str, element: gearfmu::dynamics::elements::Element) -> (PathBuf, String) {
+    log::set_logger(&Capture).ok();
+    log::set_max_level(log::LevelFilter::Trace);
+    let model = ModelKind::Element(element);
+    let guid = ModelFile::compute_guid(gearfmu::dynamics::elements::ELEMENTS_TOML, name, &model);
+    let dir = std::env::temp_dir().join(format!("gearfmu-c-api-{}", std::process::id())).join(name).join("resources");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = ModelFile { guid: guid.clone(), pair_name: name.into(), model };
+    std::fs::write(dir.join(FILE_NAME), file.to_bytes()).unwrap();
+    (dir, guid)
+}
+
+/// An element's value reference by name (elements.toml).
+fn element_vr(kind: &str, name: &str) -> u32 {
+    gearfmu::dynamics::elements::variables_of(kind).iter().find(|v| v.name == name).unwrap().value_reference
+}
+
+/// The element FMUs through the same C API and state machine as the gear pair (issue 29): the
+/// shaft's torques are its closed form at once (direct feedthrough, declared), an inertia
+/// integrates a held torque as the closed form, an FMU state restores the run bit for bit and
+/// survives serialization, and bad calls are refused with the reason logged: a value reference
+/// the element does not have, a NaN input, a parameter after initialization, a negative
+/// stiffness, a step before initialization, a gear pair's model file in an element's place.
+#[test]
+fn element_fmus_follow_the_state_machine_and_refuse_bad_calls() {
+    use gearfmu::dynamics::elements::Element;
+    let (dir, guid) =
+        element_resources("shaft", Element::Shaft { stiffness_nm_per_rad: 2e4, damping_nms_per_rad: 3.0 });
+    let fresh = |name: &str| {
+        let c = instantiate_at(name, &dir, &guid);
+        assert!(!c.is_null(), "{:?}", logs(name));
+        c
+    };
+    let shaft = fresh("element-shaft");
+    let v = |n: &str| element_vr("shaft", n);
+    assert_eq!(fmi2SetupExperiment(shaft, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(shaft), OK);
+    let inputs = [v("phi_a"), v("w_a"), v("phi_b"), v("w_b")];
+    assert_eq!(fmi2SetReal(shaft, inputs.as_ptr(), 4, [0.1, 5.0, 0.1003, 4.0].as_ptr()), OK);
+    let mut tau = [0.0; 2];
+    assert_eq!(fmi2GetReal(shaft, [v("tau_a"), v("tau_b")].as_ptr(), 2, tau.as_mut_ptr()), OK);
+    let closed_form = 2e4 * 0.0003 + 3.0 * (4.0 - 5.0);
+    assert!((tau[0] - closed_form).abs() < 1e-9 && tau[1] == -tau[0], "{tau:?} vs {closed_form}");
+    assert_eq!(fmi2SetReal(shaft, &v("c"), 1, &-1.0), ERR);
+    assert_logged("element-shaft", "shaft parameter c must be a finite number ≥ 0, got -1e0");
+    fmi2FreeInstance(shaft);
+    let shaft = fresh("element-shaft-vr");
+    assert_eq!(fmi2SetReal(shaft, &7, 1, &1.0), ERR);
+    assert_logged("element-shaft-vr", "value reference 7 is not a variable of this shaft FMU");
+    fmi2FreeInstance(shaft);
+    let shaft = fresh("element-shaft-early");
+    assert_eq!(fmi2DoStep(shaft, 0.0, 1e-4, 1), ERR, "a step before initialization");
+    fmi2FreeInstance(shaft);
+
+    let element = Element::Inertia { inertia_kgm2: 0.5, max_step_s: 1e-4 };
+    let (dir, guid) = element_resources("inertia", element);
+    let c = instantiate_at("element-inertia", &dir, &guid);
+    assert!(!c.is_null(), "{:?}", logs("element-inertia"));
+    let v = |n: &str| element_vr("inertia", n);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2SetReal(c, &v("w_start"), 1, &2.0), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    let read = |c: fmi2Component| {
+        let mut out = [0.0; 2];
+        assert_eq!(fmi2GetReal(c, [v("phi"), v("w")].as_ptr(), 2, out.as_mut_ptr()), OK);
+        out
+    };
+    // Closed form: τ = 3 − 1 N·m on J = 0.5 from ω₀ = 2 rad/s: ω = 2 + 4t, φ = 2t + 2t².
+    assert_eq!(fmi2SetReal(c, [v("tau_a"), v("tau_b")].as_ptr(), 2, [3.0, -1.0].as_ptr()), OK);
+    for k in 0..10 {
+        assert_eq!(fmi2DoStep(c, k as f64 * 1e-3, 1e-3, 1), OK);
+    }
+    let [phi, w] = read(c);
+    assert!((w - (2.0 + 4.0 * 0.01)).abs() < 1e-12 && (phi - (2.0 * 0.01 + 2.0 * 1e-4)).abs() < 1e-12, "{phi} {w}");
+    // An FMU state restores the run bit for bit, also through its serialized form.
+    let saved = state_of(c);
+    let run_on = |c: fmi2Component| {
+        for k in 10..20 {
+            assert_eq!(fmi2DoStep(c, k as f64 * 1e-3, 1e-3, 1), OK);
+        }
+        read(c)
+    };
+    let first = run_on(c);
+    assert_eq!(fmi2SetFMUstate(c, saved), OK);
+    assert_eq!(run_on(c), first);
+    let (status, restored) = deserialize(c, &serialize(c, saved));
+    assert_eq!(status, OK);
+    assert_eq!(fmi2SetFMUstate(c, restored), OK);
+    assert_eq!(run_on(c), first);
+    for mut s in [saved, restored] {
+        assert_eq!(unsafe { fmi2FreeFMUstate(c, &mut s) }, OK);
+    }
+    // Refusals last: a refused call leaves the instance in the Error state.
+    assert_eq!(fmi2SetReal(c, &v("tau_a"), 1, &f64::NAN), ERR);
+    assert_logged("element-inertia", "is not finite; input refused");
+    fmi2FreeInstance(c);
+    let c = instantiate_at("element-inertia-fixed", &dir, &guid);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), OK);
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2ExitInitializationMode(c), OK);
+    assert_eq!(fmi2SetReal(c, &v("J"), 1, &1.0), ERR);
+    assert_logged("element-inertia-fixed", "J is a fixed parameter");
+    fmi2FreeInstance(c);
+
+    // A gear pair's model file where the element's should be: refused at instantiation.
+    let (pair_dir, _) = resources();
+    assert!(instantiate_at("element-wrong-file", pair_dir, &guid).is_null());
+    assert_logged("element-wrong-file", "does not match the FMU's model data");
+}

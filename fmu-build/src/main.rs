@@ -665,7 +665,9 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
     )
     .map_err(anyhow::Error::msg)?;
     let file = ModelFile { guid: guid.clone(), pair_name: pair.name.clone(), model: kind };
-    write_fmu_archive(output, &xml, &file, so)
+    write_fmu_archive(output, &xml, &file, so)?;
+    println!("wrote {} (GUID {guid})", output.display());
+    Ok(())
 }
 
 /// The .fmu archive: modelDescription.xml, the binary and the model file.
@@ -680,7 +682,6 @@ fn write_fmu_archive(output: &Path, xml: &str, file: &ModelFile, so: &[u8]) -> R
     zip.start_file(format!("resources/{}", gearfmu::model_file::FILE_NAME), options)?;
     zip.write_all(&file.to_bytes())?;
     zip.finish()?;
-    println!("wrote {} (GUID {})", output.display(), file.guid);
     Ok(())
 }
 
@@ -1247,7 +1248,9 @@ fn main() {
             check_output_folder(&output)?;
             let element = options.element(kind)?;
             let name = name.unwrap_or_else(|| element.kind().to_string());
-            drivetrain::write_element_fmu(&output, &name, element, &library_bytes(library)?)
+            drivetrain::write_element_fmu(&output, &name, element, &library_bytes(library)?)?;
+            println!("wrote {}", output.display());
+            Ok(())
         })(),
         Command::Ssp { gear_fmu, output, options, library } => (|| {
             check_output_folder(&output)?;
