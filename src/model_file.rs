@@ -85,9 +85,13 @@ impl ModelFile {
     }
 
     pub fn read(resources: &Path) -> Result<ModelFile, String> {
+        Self::from_bytes(&Self::read_bytes(resources)?)
+    }
+
+    /// The model file's bytes, from an FMU's resources folder.
+    pub fn read_bytes(resources: &Path) -> Result<Vec<u8>, String> {
         let path = resources.join(FILE_NAME);
-        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        Self::from_bytes(&bytes)
+        std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))
     }
 
     /// GUID = SHA-256 of the interface text and the model body, formatted as a UUID-like string.

@@ -222,6 +222,11 @@ pub const CONNECTIONS: &[(&str, &str, &str, &str)] = &[
     ("shaft_2", "tau_b", "load", "tau"),
 ];
 
+fn shaft(name: &'static str, stiffness_nm_per_rad: f64, damping_nms_per_rad: f64) -> Component {
+    let element = Element::Shaft { stiffness_nm_per_rad, damping_nms_per_rad };
+    Component { name, element: Some(element), connectors: SHAFT_CONNECTORS }
+}
+
 /// Writes the SSP archive of the demo drivetrain around the gear FMU `gear_fmu`.
 pub fn write_ssp(output: &Path, gear_fmu: &Path, o: &DrivetrainOptions, so: &[u8]) -> Result<()> {
     let gear_bytes = std::fs::read(gear_fmu).with_context(|| format!("cannot read {}", gear_fmu.display()))?;
@@ -237,23 +242,9 @@ pub fn write_ssp(output: &Path, gear_fmu: &Path, o: &DrivetrainOptions, so: &[u8
             }),
             connectors: BODY_CONNECTORS,
         },
-        Component {
-            name: "shaft_1",
-            element: Some(Element::Shaft {
-                stiffness_nm_per_rad: o.shaft_1_stiffness_nm_per_rad,
-                damping_nms_per_rad: o.shaft_1_damping_nms_per_rad,
-            }),
-            connectors: SHAFT_CONNECTORS,
-        },
+        shaft("shaft_1", o.shaft_1_stiffness_nm_per_rad, o.shaft_1_damping_nms_per_rad),
         Component { name: "gear_pair", element: None, connectors: GEAR_CONNECTORS },
-        Component {
-            name: "shaft_2",
-            element: Some(Element::Shaft {
-                stiffness_nm_per_rad: o.shaft_2_stiffness_nm_per_rad,
-                damping_nms_per_rad: o.shaft_2_damping_nms_per_rad,
-            }),
-            connectors: SHAFT_CONNECTORS,
-        },
+        shaft("shaft_2", o.shaft_2_stiffness_nm_per_rad, o.shaft_2_damping_nms_per_rad),
         Component {
             name: "load",
             element: Some(Element::Load {

@@ -5,7 +5,7 @@
 use super::elements::{ElementFmu, ElementState};
 use super::fmu::{GearPairFmu, GearPairState};
 use crate::fmi2::{Model, Phase};
-use crate::model_file::{ModelFile, FILE_NAME};
+use crate::model_file::ModelFile;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -68,12 +68,11 @@ impl Model for AnyModel {
     type State = AnyState;
 
     fn load(resources: &Path, guid: &str) -> Result<Self, String> {
-        let path = resources.join(FILE_NAME);
-        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let bytes = ModelFile::read_bytes(resources)?;
         if ModelFile::holds_gear_pair(&bytes)? {
-            Ok(AnyModel::GearPair(GearPairFmu::load(resources, guid)?))
+            Ok(AnyModel::GearPair(GearPairFmu::from_bytes(bytes, guid)?))
         } else {
-            Ok(AnyModel::Element(ElementFmu::load(resources, guid)?))
+            Ok(AnyModel::Element(ElementFmu::from_bytes(bytes, guid)?))
         }
     }
 

@@ -15,7 +15,7 @@
 use super::shared_model::SharedByContent;
 use crate::fmi2::{Model, Phase};
 use crate::interface::Variable;
-use crate::model_file::{ModelFile, ModelKind, FILE_NAME};
+use crate::model_file::{ModelFile, ModelKind};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
@@ -297,6 +297,15 @@ impl LoadedElement {
 }
 
 impl ElementFmu {
+    /// The element of a model file's bytes, shared with the live instances of the same bytes.
+    pub fn from_bytes(bytes: Vec<u8>, guid: &str) -> Result<Self, String> {
+        static LOADED: SharedByContent<LoadedElement> = SharedByContent::new();
+        let loaded =
+            LOADED.get_or_load(bytes, |bytes| LoadedElement::from_model_file(ModelFile::from_bytes(bytes)?))?;
+        super::fmu::check_guid(&loaded.guid, guid)?;
+        Ok(ElementFmu(loaded))
+    }
+
     fn variable(&self, vr: u32) -> Result<&'static Variable, String> {
         let element = &self.0.element;
         element
@@ -334,15 +343,7 @@ impl Model for ElementFmu {
     type State = ElementState;
 
     fn load(resources: &Path, guid: &str) -> Result<Self, String> {
-        static LOADED: SharedByContent<LoadedElement> = SharedByContent::new();
-        let path = resources.join(FILE_NAME);
-        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let loaded =
-            LOADED.get_or_load(bytes, |bytes| LoadedElement::from_model_file(ModelFile::from_bytes(bytes)?))?;
-        if loaded.guid != guid {
-            return Err(format!("GUID {guid} does not match the FMU's model data ({})", loaded.guid));
-        }
-        Ok(ElementFmu(loaded))
+        ElementFmu::from_bytes(ModelFile::read_bytes(resources)?, guid)
     }
 
     fn initial_state(&self) -> ElementState {
@@ -419,14 +420,7 @@ impl Model for ElementFmu {
 
     fn check_step(&self, s: &ElementState, h: f64) -> Result<(), String> {
         let Some((_, max_step)) = s.rotor_parameters() else { return Ok(()) };
-        let n = (h / max_step).ceil();
-        if n <= MAX_SUBSTEPS {
-            Ok(())
-        } else {
-            Err(format!(
-                "communicationStepSize h = {h:e} s with max_step = {max_step:e} s needs {n:e} sub-steps, more than the bound of {MAX_SUBSTEPS:e} per call; take shorter communication steps or a larger max_step"
-            ))
-        }
+        super::check_substep_bound(h, max_step, MAX_SUBSTEPS)
     }
 
     fn check_state(&self, s: &ElementState, initialized: bool) -> Result<(), String> {

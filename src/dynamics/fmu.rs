@@ -12,7 +12,7 @@ use crate::dynamics::pmor::quasi_static::{Condensation, GearSplit};
 use crate::fmi2::{Model, Phase};
 use crate::gear::sig;
 use crate::interface;
-use crate::model_file::{ModelFile, ModelKind, FILE_NAME};
+use crate::model_file::{ModelFile, ModelKind};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
@@ -238,6 +238,24 @@ pub const LUMPED_DEFAULT_MAX_STEP_S: f64 = 1e-5;
 impl GearPairFmu {
     pub fn from_model_file(file: ModelFile) -> Result<Self, String> {
         Ok(GearPairFmu(Arc::new(LoadedPair::from_model_file(file)?)))
+    }
+
+    /// The pair of a model file's bytes, shared with the live instances of the same bytes
+    /// (`shared_model`), for the master's GUID.
+    pub fn from_bytes(bytes: Vec<u8>, guid: &str) -> Result<Self, String> {
+        static LOADED: SharedByContent<LoadedPair> = SharedByContent::new();
+        let pair = LOADED.get_or_load(bytes, |bytes| LoadedPair::from_model_file(ModelFile::from_bytes(bytes)?))?;
+        check_guid(&pair.guid, guid)?;
+        Ok(GearPairFmu(pair))
+    }
+}
+
+/// The GUID the master passed against the model file's.
+pub fn check_guid(file: &str, master: &str) -> Result<(), String> {
+    if file == master {
+        Ok(())
+    } else {
+        Err(format!("GUID {master} does not match the FMU's model data ({file})"))
     }
 }
 
@@ -534,14 +552,7 @@ impl Model for GearPairFmu {
     type State = GearPairState;
 
     fn load(resources: &Path, guid: &str) -> Result<Self, String> {
-        static LOADED: SharedByContent<LoadedPair> = SharedByContent::new();
-        let path = resources.join(FILE_NAME);
-        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let pair = LOADED.get_or_load(bytes, |bytes| LoadedPair::from_model_file(ModelFile::from_bytes(bytes)?))?;
-        if pair.guid != guid {
-            return Err(format!("GUID {guid} does not match the FMU's model data ({})", pair.guid));
-        }
-        Ok(GearPairFmu(pair))
+        GearPairFmu::from_bytes(ModelFile::read_bytes(resources)?, guid)
     }
 
     fn initial_state(&self) -> GearPairState {
@@ -745,16 +756,8 @@ impl Model for GearPairFmu {
     }
 
     fn check_step(&self, s: &GearPairState, h: f64) -> Result<(), String> {
-        let max_step_s = max_step(s.max_step_s)?;
-        let n = (h / max_step_s).ceil();
-        let bound = self.max_substeps();
-        if n <= bound {
-            Ok(())
-        } else {
-            Err(format!(
-                "communicationStepSize h = {h:e} s with max_step = {max_step_s:e} s needs {n:e} sub-steps, more than the bound of {bound:e} per call (about 10 s of work); take shorter communication steps or a larger max_step"
-            ))
-        }
+        // The bound is about 10 s of work.
+        super::check_substep_bound(h, max_step(s.max_step_s)?, self.max_substeps())
     }
 
     fn check_state(&self, s: &GearPairState, initialized: bool) -> Result<(), String> {

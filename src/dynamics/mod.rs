@@ -25,6 +25,19 @@ pub fn substep_count(duration: f64, max_step: f64) -> usize {
     n.max(1.0) as usize
 }
 
+/// Refuses a communication step h that needs more than `bound` sub-steps of `max_step` (a call
+/// must end in bounded time); the message says how to get under it.
+pub fn check_substep_bound(h: f64, max_step: f64, bound: f64) -> Result<(), String> {
+    let n = (h / max_step).ceil();
+    if n <= bound {
+        Ok(())
+    } else {
+        Err(format!(
+            "communicationStepSize h = {h:e} s with max_step = {max_step:e} s needs {n:e} sub-steps, more than the bound of {bound:e} per call; take shorter communication steps or a larger max_step"
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::substep_count;
