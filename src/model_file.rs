@@ -105,23 +105,3 @@ impl ModelFile {
         format!("{{{}-{}-{}-{}-{}}}", &hex[0..8], &hex[8..12], &hex[12..16], &hex[16..20], &hex[20..32])
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The peek agrees with the full decode for every kind (the variant index it reads).
-    #[test]
-    fn the_kind_peek_agrees_with_the_decoded_kind() {
-        let element = Element::Shaft { stiffness_nm_per_rad: 1e4, damping_nms_per_rad: 1.0 };
-        let file = ModelFile { guid: "{g}".into(), pair_name: "shaft".into(), model: ModelKind::Element(element) };
-        let bytes = file.to_bytes();
-        assert!(!ModelFile::holds_gear_pair(&bytes).unwrap());
-        assert!(!ModelFile::from_bytes(&bytes).unwrap().model.is_gear_pair());
-        let spec = crate::gear::spec::PairSpec::from_toml(include_str!("../examples/small_spur.toml")).unwrap();
-        let pair = crate::gear::GearPair::from_spec(&spec).unwrap();
-        let mesh = crate::dynamics::lumped::LumpedMesh::from_pair(&pair).unwrap();
-        let file = ModelFile { guid: "{g}".into(), pair_name: "pair".into(), model: ModelKind::Lumped(mesh) };
-        assert!(ModelFile::holds_gear_pair(&file.to_bytes()).unwrap());
-    }
-}

@@ -1425,3 +1425,19 @@ fn element_fmus_follow_the_state_machine_and_refuse_bad_calls() {
     assert!(instantiate_at("element-wrong-file", pair_dir, &guid).is_null());
     assert_logged("element-wrong-file", "does not match the FMU's model data");
 }
+
+/// The model file's kind, read without decoding the model (`ModelFile::holds_gear_pair`, which
+/// picks the loader at instantiation), agrees with the full decode for an element and a pair.
+#[test]
+fn the_kind_peek_agrees_with_the_decoded_kind() {
+    use gearfmu::dynamics::elements::Element;
+    let element = Element::Shaft { stiffness_nm_per_rad: 1e4, damping_nms_per_rad: 1.0 };
+    let file = ModelFile { guid: "{g}".into(), pair_name: "shaft".into(), model: ModelKind::Element(element) };
+    let bytes = file.to_bytes();
+    assert!(!ModelFile::holds_gear_pair(&bytes).unwrap());
+    assert!(!ModelFile::from_bytes(&bytes).unwrap().model.is_gear_pair());
+    let (dir, _) = resources();
+    let bytes = std::fs::read(dir.join(FILE_NAME)).unwrap();
+    assert!(ModelFile::holds_gear_pair(&bytes).unwrap());
+    assert!(ModelFile::from_bytes(&bytes).unwrap().model.is_gear_pair());
+}
