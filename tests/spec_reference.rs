@@ -6,6 +6,7 @@
 //! error until it is added here (and therefore checked).
 
 use gearfmu::fe::gear_mesh::{MeshSpec, ProfileGrading};
+use gearfmu::gear::modification::{ModificationSpec, ReliefShape};
 use gearfmu::gear::spec::{GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec};
 use gearfmu::gear::{HertzContact, PairSpec};
 
@@ -17,6 +18,19 @@ fn gear(teeth: i64) -> GearSpec {
         inertia_kgm2: Some(0.01),
         allow_undercut: true,
         tip_edge_radius_mm: Some(0.5),
+        modification: Some(ModificationSpec {
+            tip_relief_um: 10.0,
+            tip_relief_length_mm: 5.0,
+            tip_relief_shape: ReliefShape::Parabolic,
+            root_relief_um: 5.0,
+            root_relief_length_mm: 3.0,
+            root_relief_shape: ReliefShape::Parabolic,
+            profile_crowning_um: 2.0,
+            lead_crowning_um: 8.0,
+            helix_slope_um: 3.0,
+            end_relief_um: 10.0,
+            end_relief_length_mm: 2.0,
+        }),
     }
 }
 
@@ -44,6 +58,7 @@ fn full_spec() -> PairSpec {
             center_distance_mm: Some(156.0),
             backlash_mm: 0.1,
             mesh_damping_ratio: 0.05,
+            misalignment_um: 12.0,
         },
         gear1: gear(21),
         gear2: gear(31),
@@ -68,7 +83,15 @@ fn every_spec_field_is_in_the_spec_reference() {
     let mut keys = Vec::new();
     for (section, entry) in value.as_table().unwrap() {
         match entry.as_table() {
-            Some(fields) => keys.extend(fields.keys().map(|k| format!("{section}.{k}"))),
+            Some(fields) => {
+                for (k, v) in fields {
+                    match v.as_table() {
+                        // A sub-table (`[gearN.modification]`): its keys, one level down.
+                        Some(sub) => keys.extend(sub.keys().map(|s| format!("{section}.{k}.{s}"))),
+                        None => keys.push(format!("{section}.{k}")),
+                    }
+                }
+            }
             None => keys.push(section.clone()),
         }
     }

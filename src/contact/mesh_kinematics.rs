@@ -304,6 +304,28 @@ impl PairPlacement {
         -(w[0] * n[1] - w[1] * n[0])
     }
 
+    /// The flank modifications' and the misalignment's opening (m, normal to the flanks) where
+    /// gear 1's flank at radius r₁ meets gear 2's at r₂ in the section at world z (gear 2's own
+    /// axial coordinate is −z): δ₁ + δ₂ + δ_ma (`gear::modification`). Zero for unmodified gears.
+    pub fn modification_m(&self, radius_m: [f64; 2], z: f64) -> f64 {
+        let p = &self.pair;
+        let (m1, m2) = (&p.gear1.modification, &p.gear2.modification);
+        let mut d = crate::gear::modification::misalignment_deviation_m(p.misalignment_m, p.face_width_m, z);
+        if m1.is_some() {
+            d += m1.deviation_m(p.gear1.roll_length_m(radius_m[0]), z);
+        }
+        if m2.is_some() {
+            d += m2.deviation_m(p.gear2.roll_length_m(radius_m[1]), -z);
+        }
+        d
+    }
+
+    /// Whether the pair carries any flank modification or misalignment.
+    pub fn is_modified(&self) -> bool {
+        let p = &self.pair;
+        p.gear1.modification.is_some() || p.gear2.modification.is_some() || p.misalignment_m != 0.0
+    }
+
     /// The contact of tooth pair j in the axial section with mid-plane z, or `None` if no
     /// candidate point lies on both flanks' active profiles. θ₁, θ₂ are the shaft angles.
     pub fn section_contact(&self, theta: [f64; 2], j: i64, section: usize, z: f64) -> Option<SectionContact> {
@@ -318,7 +340,10 @@ impl PairPlacement {
         let loa = p.loa_length_m();
         let form = [g1.form_radius_m.max(g1.base_radius_m), g2.form_radius_m.max(g2.base_radius_m)];
         let mut best: Option<SectionContact> = None;
-        let mut consider = |c: SectionContact| {
+        let mut consider = |mut c: SectionContact| {
+            // The flanks' modifications open the gap where they remove material; before the
+            // choice, since a tip relief can hand the contact to another candidate.
+            c.rigid_penetration_m -= self.modification_m(c.radius_m, z);
             if best.map_or(true, |b| c.rigid_penetration_m > b.rigid_penetration_m) {
                 best = Some(c);
             }

@@ -6,6 +6,7 @@
 
 pub mod fillet;
 pub mod involute;
+pub mod modification;
 pub mod rating;
 pub mod root_stress;
 pub mod spec;
@@ -51,6 +52,16 @@ pub struct Gear {
     pub tip_edge_radius_m: f64,
     /// Hand of the helix (gear 1's from the spec, gear 2's the opposite one).
     pub helix_hand: spec::HelixHand,
+    /// Flank modifications (`[gearN.modification]`; none by default).
+    #[serde(default)]
+    pub modification: modification::FlankModification,
+}
+
+impl Gear {
+    /// The roll length ρ = √(r² − r_b²) of the involute point at radius r (0 inside the base circle).
+    pub fn roll_length_m(&self, radius_m: f64) -> f64 {
+        (radius_m * radius_m - self.base_radius_m * self.base_radius_m).max(0.0).sqrt()
+    }
 }
 
 impl Gear {
@@ -134,6 +145,9 @@ pub struct GearPair {
     pub rack_dedendum_coefficient: f64,
     /// Contact law of the lumped model.
     pub hertz_contact: HertzContact,
+    /// Shaft misalignment in the plane of action across the face width (m; closes the +z end).
+    #[serde(default)]
+    pub misalignment_m: f64,
 }
 
 impl GearPair {
@@ -367,6 +381,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
             inertia_overridden: inertia_override.is_some(),
             tip_edge_radius_m: tip_edge_radius,
             helix_hand,
+            modification: Default::default(),
         };
         // Polar moment of inertia of the real section (fillet + involute), unless overridden.
         gear.inertia_kgm2 = inertia_override.unwrap_or(rho * b * gear.section_moments(alpha_t).1);
@@ -519,7 +534,30 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         operating_torque_nm: 0.0,
         rack_dedendum_coefficient: hf,
         hertz_contact: spec.lumped.hertz_contact,
+        misalignment_m: 0.0,
     };
+    // Flank modifications, checked against each gear's active profile (roll lengths: gear 1
+    // from T₁, gear 2 from T₂ along the line of action).
+    let loa_m = pair.loa_length_m();
+    let active = [[path_start, path_end], [loa_m - path_end, loa_m - path_start]];
+    for (which, g, active) in [("gear1", &spec.gear1, active[0]), ("gear2", &spec.gear2, active[1])] {
+        if let Some(m) = &g.modification {
+            let built = modification::build(which, m, active, b, mn)?;
+            if which == "gear1" {
+                pair.gear1.modification = built;
+            } else {
+                pair.gear2.modification = built;
+            }
+        }
+    }
+    let f_ma = spec.mounting.misalignment_um;
+    if !f_ma.is_finite() || f_ma.abs() > modification::MAX_AMOUNT_OVER_MODULE * mn * 1e6 {
+        return Err(invalid(
+            "mounting.misalignment_um",
+            format!("must be finite and within ±{:.0} µm, got {f_ma}", modification::MAX_AMOUNT_OVER_MODULE * mn * 1e6),
+        ));
+    }
+    pair.misalignment_m = f_ma * 1e-6;
     let yield_torque = rating::yield_torque_nm(&pair);
     pair.operating_torque_nm = match spec.operating.torque_nm {
         None => rating::rated_torque_nm(&pair),

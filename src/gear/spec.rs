@@ -68,6 +68,9 @@ pub struct GearSpec {
     /// and a sharp corner is no Hertz contact). Must lie in (0, half the tip land].
     #[serde(default)]
     pub tip_edge_radius_mm: Option<f64>,
+    /// Flank modifications (ISO 21771-1): tip and root relief, crowning, helix slope, end relief.
+    #[serde(default)]
+    pub modification: Option<super::modification::ModificationSpec>,
 }
 
 /// Basic rack (ISO 53 style), shared by both gears.
@@ -119,6 +122,10 @@ pub struct MountingSpec {
     /// Mesh damping as a fraction of critical damping of the mesh mode.
     #[serde(default = "default_damping")]
     pub mesh_damping_ratio: f64,
+    /// Shaft misalignment in the plane of action across the face width (µm): the +z face end
+    /// closes by it against the −z end.
+    #[serde(default)]
+    pub misalignment_um: f64,
 }
 
 /// How the lumped model treats the contact of the flanks.

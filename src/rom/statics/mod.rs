@@ -252,7 +252,10 @@ impl<'a> StaticModel<'a> {
                     if !(g.form_radius_m.max(g.base_radius_m)..=g.tip_radius_m).contains(&r) {
                         continue;
                     }
-                    let alpha0 = -cos_bb * place.distance_from_flank(master, j, z, own);
+                    let slave_radius = x[0].hypot(x[1]);
+                    let radii = if slave == 0 { [slave_radius, r] } else { [r, slave_radius] };
+                    let alpha0 =
+                        -cos_bb * place.distance_from_flank(master, j, z, own) - place.modification_m(radii, z);
                     if alpha0 < -0.2 * p.base_pitch_m {
                         continue;
                     }
@@ -285,7 +288,7 @@ impl<'a> StaticModel<'a> {
                             force_n: 0.0,
                             penetration_m: 0.0,
                             half_width_m: 0.0,
-                            radius_m: if slave == 0 { [x[0].hypot(x[1]), r] } else { [r, x[0].hypot(x[1])] },
+                            radius_m: radii,
                             arm_ratio: arm,
                         },
                         alpha0,

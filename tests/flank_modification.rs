@@ -1,0 +1,135 @@
+//! Flank modifications in the statics (issue 27), on the Kurokawa spur pair's coarse mesh.
+//!
+//! - The gap: a relief opens the rigid gap by exactly its closed-form deviation where the flank
+//!   point lies inside it, and not at all outside (the contact search against `gear::modification`).
+//! - Harris's picture (Harris 1958; Welbourn's review): a linear tip relief on both gears over
+//!   (ε_α − 1)·p_b lowers the STE's peak-to-peak to a minimum near the relief that equals one
+//!   tooth pair's deflection under the whole load, and raises it again beyond. The estimate of that
+//!   deflection comes from the unmodified statics' own zones (single-zone STE minus double-zone
+//!   STE ≈ F/(2k): twice it is F/k), independent of the relieved runs.
+//! - A bad modification names its field and rule (`gear::modification`'s unit tests cover each).
+
+use gearfmu::contact::hertz::ApproachLaw;
+use gearfmu::contact::mesh_kinematics::{Flank, PairPlacement};
+use gearfmu::fe::clamped_gear::ClampedGear;
+use gearfmu::fe::gear_mesh::MeshSpec;
+use gearfmu::fe::hex8::Formulation;
+use gearfmu::gear::{GearPair, PairSpec};
+use gearfmu::rom::flank::FlankGrid;
+use gearfmu::rom::reductor::{pmor_hertz, ReducedGear};
+use gearfmu::rom::statics::{ContactModel, StaticModel};
+use std::f64::consts::PI;
+
+const SPUR: &str = include_str!("../examples/kurokawa_spur.toml");
+
+fn pair_with(extra: &str) -> GearPair {
+    GearPair::from_spec(&PairSpec::from_toml(&format!("{SPUR}\n{extra}")).unwrap()).unwrap()
+}
+
+/// A linear tip relief of `um` on both gears over (ε_α − 1)·p_b.
+fn long_tip_relief(um: f64, p: &GearPair) -> String {
+    let length_mm = (p.transverse_contact_ratio - 1.0) * p.base_pitch_m * 1e3;
+    (1..=2)
+        .map(|i| format!("[gear{i}.modification]\ntip_relief_um = {um}\ntip_relief_length_mm = {length_mm}\n"))
+        .collect()
+}
+
+/// Both gears reduced by PMOR-Hertz (h = 3 mm, p_en = 99.9 %): the reduction does not depend on
+/// the modification (the FE gears are the unmodified ones; δ enters the gap only).
+fn reduce(p: &GearPair) -> [ReducedGear; 2] {
+    let place = PairPlacement::new(p);
+    let spec = MeshSpec::default();
+    let mut hertz = Vec::new();
+    for (i, gear) in [&p.gear1, &p.gear2].into_iter().enumerate() {
+        let model = ClampedGear::new(p, gear, &spec, Formulation::IncompatibleModes);
+        let factor = model.factorize().unwrap();
+        let z = gear.teeth as i64;
+        let teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
+        let grid = FlankGrid::contact_flank(&model.mesh, i, Flank::Drive, &teeth).unwrap();
+        let (reduced, _, _) = pmor_hertz(&model, &factor, grid, 3e-3, 0.999, |_| {}).unwrap();
+        hertz.push(reduced);
+    }
+    hertz.try_into().unwrap()
+}
+
+/// Closed form: along the path of contact at zero load, the relieved pair's rigid penetration is
+/// the unmodified one less δ₁(ρ₁) + δ₂(ρ₂), with δ the linear relief at each gear's roll length.
+#[test]
+fn a_tip_relief_opens_the_rigid_gap_by_its_closed_form() {
+    let plain = pair_with("");
+    let relieved = pair_with(&long_tip_relief(20.0, &plain));
+    let (a, b) = (PairPlacement::new(&plain), PairPlacement::new(&relieved));
+    let length = (plain.transverse_contact_ratio - 1.0) * plain.base_pitch_m;
+    let loa = plain.loa_length_m();
+    let relief = |roll: f64, tip_roll: f64| 20e-6 * ((roll - (tip_roll - length)) / length).clamp(0.0, 1.0);
+    let mut inside = 0;
+    for k in 0..200 {
+        let theta2 = 2.0 * PI / plain.gear2.teeth as f64 * k as f64 / 200.0;
+        let theta1 = theta2 * plain.gear2.teeth as f64 / plain.gear1.teeth as f64;
+        let (Some(c0), Some(c1)) =
+            (a.section_contact([theta1, theta2], 0, 0, 0.0), b.section_contact([theta1, theta2], 0, 0, 0.0))
+        else {
+            continue;
+        };
+        if c0.kind != gearfmu::contact::mesh_kinematics::ContactKind::Conjugate || c1.kind != c0.kind {
+            continue;
+        }
+        let rho = [plain.gear1.roll_length_m(c0.radius_m[0]), plain.gear2.roll_length_m(c0.radius_m[1])];
+        let expected = relief(rho[0], plain.path_end_m) + relief(rho[1], loa - plain.path_start_m);
+        let opened = c0.rigid_penetration_m - c1.rigid_penetration_m;
+        assert!((opened - expected).abs() < 1e-12, "θ₂ {theta2}: opened {opened:e}, closed form {expected:e}");
+        inside += (expected > 0.0) as usize;
+    }
+    assert!(inside > 20, "the sweep must cross the relieved zones ({inside} points inside)");
+}
+
+/// Harris's minimum at 185 N·m: the relief at the single-pair deflection estimate cuts the
+/// peak-to-peak below half of the unmodified pair's; three times that relief raises it above the
+/// minimum again (the relieved pair then leaves the double zone to one pair).
+#[test]
+fn the_tip_relief_at_the_single_pair_deflection_minimizes_the_ste_ripple() {
+    let plain = pair_with("");
+    let hertz = reduce(&plain);
+    let angles = 30;
+    let torque = 185.0;
+    let pitch = 2.0 * PI / plain.gear2.teeth as f64;
+    let figures = |p: &GearPair| {
+        let model =
+            StaticModel::new(p, [&hertz[0], &hertz[1]], ContactModel::Hertz { law: ApproachLaw::Weber }).unwrap();
+        let cases: Vec<(f64, usize)> = (0..angles)
+            .map(|k| {
+                let case = model.solve(pitch * (k as f64 + 0.5) / angles as f64, torque).unwrap();
+                (case.ste_m, case.pairs_in_contact)
+            })
+            .collect();
+        let mean = |pairs: usize| {
+            let zone: Vec<f64> = cases.iter().filter(|c| c.1 == pairs).map(|c| c.0).collect();
+            zone.iter().sum::<f64>() / zone.len().max(1) as f64
+        };
+        let (lo, hi) = cases.iter().fold((f64::MAX, f64::MIN), |(a, b), c| (a.min(c.0), b.max(c.0)));
+        (hi - lo, mean(1), mean(2))
+    };
+    let (pp_plain, single, double) = figures(&plain);
+    let estimate_um = 2.0 * (single - double) * 1e6;
+    let (pp_best, _, _) = figures(&pair_with(&long_tip_relief(estimate_um, &plain)));
+    let (pp_over, _, _) = figures(&pair_with(&long_tip_relief(3.0 * estimate_um, &plain)));
+    println!(
+        "185 N·m: STE p-p {:.3} µm unmodified, {:.3} µm with {estimate_um:.2} µm of tip relief (the single-pair deflection estimate), {:.3} µm with three times it",
+        pp_plain * 1e6,
+        pp_best * 1e6,
+        pp_over * 1e6
+    );
+    assert!(pp_best < 0.5 * pp_plain);
+    assert!(pp_over > pp_best);
+}
+
+/// Bad values through the whole spec: the field and the rule.
+#[test]
+fn a_relief_that_starts_outside_the_active_flank_is_refused() {
+    let text = format!("{SPUR}\n[gear1.modification]\ntip_relief_um = 10.0\ntip_relief_length_mm = 40.0\n");
+    let e = GearPair::from_spec(&PairSpec::from_toml(&text).unwrap()).unwrap_err().to_string();
+    assert!(e.contains("gear1.modification.tip_relief_length_mm") && e.contains("outside the active profile"), "{e}");
+    let text = format!("{SPUR}\n[gear2.modification]\nlead_crowning_um = -3.0\n");
+    let e = GearPair::from_spec(&PairSpec::from_toml(&text).unwrap()).unwrap_err().to_string();
+    assert!(e.contains("gear2.modification.lead_crowning_um") && e.contains("≥ 0"), "{e}");
+}
