@@ -147,6 +147,8 @@ pub struct PairPlacement {
     twist: [f64; 2],
     /// s = +1 if gear 1 is right-handed, −1 if left-handed.
     hand: f64,
+    /// Whether the pair carries a flank modification or a misalignment (`modification_m`).
+    modified: bool,
     /// The smallest rate at which any candidate's rigid penetration follows r_b1·θ₁
     /// (`flank_can_close`).
     smallest_arm_ratio: f64,
@@ -184,6 +186,9 @@ impl PairPlacement {
         // less the two tooth thicknesses at the operating pitch circles, along the LOA.
         let profile_backlash = pair.base_pitch_m - 2.0 * (g1.base_radius_m * psi_w1 + g2.base_radius_m * psi_w2);
         let mut place = PairPlacement {
+            modified: pair.gear1.modification.is_some()
+                || pair.gear2.modification.is_some()
+                || pair.misalignment_m != 0.0,
             smallest_arm_ratio: 0.0,
             thinning_loa_m: pair.backlash_loa_m - profile_backlash,
             pair: pair.clone(),
@@ -308,6 +313,9 @@ impl PairPlacement {
     /// gear 1's flank at radius r₁ meets gear 2's at r₂ in the section at world z (gear 2's own
     /// axial coordinate is −z): δ₁ + δ₂ + δ_ma (`gear::modification`). Zero for unmodified gears.
     pub fn modification_m(&self, radius_m: [f64; 2], z: f64) -> f64 {
+        if !self.modified {
+            return 0.0;
+        }
         let p = &self.pair;
         let (m1, m2) = (&p.gear1.modification, &p.gear2.modification);
         let mut d = crate::gear::modification::misalignment_deviation_m(p.misalignment_m, p.face_width_m, z);
@@ -322,8 +330,7 @@ impl PairPlacement {
 
     /// Whether the pair carries any flank modification or misalignment.
     pub fn is_modified(&self) -> bool {
-        let p = &self.pair;
-        p.gear1.modification.is_some() || p.gear2.modification.is_some() || p.misalignment_m != 0.0
+        self.modified
     }
 
     /// The contact of tooth pair j in the axial section with mid-plane z, or `None` if no
