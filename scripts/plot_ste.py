@@ -19,7 +19,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-COLUMNS = ["method", "torque_nm", "theta1_rad", "theta2_rad", "ste_m", "mesh_force_n", "pairs_in_contact"]
+COLUMNS = ["method", "torque_nm", "theta1_rad", "theta2_rad", "ste_m", "mesh_force_n", "pairs_in_contact", "k_h_beta"]
 STYLES = {"pmor-hertz": "-", "penalty": "--"}
 
 
@@ -27,8 +27,9 @@ def read_cases(path):
     """Rows of one CSV grouped by (method, torque), each sorted by the driven gear's angle."""
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
-        if reader.fieldnames != COLUMNS:
-            sys.exit(f"{path}: expected the columns {','.join(COLUMNS)}, found {reader.fieldnames}")
+        # The fixed columns, then one line_load_<s>_n_per_mm per axial section.
+        if reader.fieldnames[: len(COLUMNS)] != COLUMNS:
+            sys.exit(f"{path}: expected the columns {','.join(COLUMNS)} first, found {reader.fieldnames}")
         curves = defaultdict(list)
         for row in reader:
             theta2_deg = math.degrees(float(row["theta2_rad"]))

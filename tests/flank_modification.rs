@@ -26,6 +26,12 @@ fn pair_with(extra: &str) -> GearPair {
     GearPair::from_spec(&PairSpec::from_toml(&format!("{SPUR}\n{extra}")).unwrap()).unwrap()
 }
 
+/// The spur pair misaligned by `um` (µm) in the plane of action, with `extra` appended.
+fn misaligned(um: f64, extra: &str) -> GearPair {
+    let text = SPUR.replacen("[mounting]\n", &format!("[mounting]\nmisalignment_um = {um}\n"), 1);
+    GearPair::from_spec(&PairSpec::from_toml(&format!("{text}\n{extra}")).unwrap()).unwrap()
+}
+
 /// A linear tip relief of `um` on both gears over (ε_α − 1)·p_b.
 fn long_tip_relief(um: f64, p: &GearPair) -> String {
     let length_mm = (p.transverse_contact_ratio - 1.0) * p.base_pitch_m * 1e3;
@@ -132,4 +138,58 @@ fn a_relief_that_starts_outside_the_active_flank_is_refused() {
     let text = format!("{SPUR}\n[gear2.modification]\nlead_crowning_um = -3.0\n");
     let e = GearPair::from_spec(&PairSpec::from_toml(&text).unwrap()).unwrap_err().to_string();
     assert!(e.contains("gear2.modification.lead_crowning_um") && e.contains("≥ 0"), "{e}");
+}
+
+/// The face load factor K_Hβ on the spur pair at 185 N·m: an aligned spur pair loads its face
+/// symmetrically about mid-face (closed form: the pair is its own mirror image), nearly evenly
+/// (K_Hβ 1.028 on this coarse mesh, 1.005 on the FMU's 10/10/10: the tooth's ends, not the
+/// contact); a misalignment raises K_Hβ, twice the misalignment more, and lead crowning takes
+/// part of it back. ISO 6336-1's K_Hβ from the same
+/// misalignment (c_γβ = 0.85·c_γα, f_sh = 0: the FE gears sit on rigid shafts) is printed beside:
+/// measured 2026-11-26, the FE K_Hβ − 1 is 1.9–2.0 × ISO's over 10–20 µm and 185–370 N·m, a
+/// finding not settled (BENCHMARKS §10), so only the order is asserted.
+#[test]
+fn misalignment_raises_the_face_load_factor_and_lead_crowning_lowers_it() {
+    let plain = pair_with("");
+    let hertz = reduce(&plain);
+    let layers = hertz[0].flank.layer_z_m.clone();
+    let pitch = 2.0 * PI / plain.gear2.teeth as f64;
+    let torque = 185.0;
+    let face_load = |p: &GearPair| {
+        let model =
+            StaticModel::new(p, [&hertz[0], &hertz[1]], ContactModel::Hertz { law: ApproachLaw::Weber }).unwrap();
+        let angles = 12;
+        let mut mean = vec![0.0; layers.len() - 1];
+        for k in 0..angles {
+            let case = model.solve(pitch * (k as f64 + 0.5) / angles as f64, torque).unwrap();
+            for (m, w) in mean.iter_mut().zip(case.face_load(&layers, false).0) {
+                *m += w / angles as f64;
+            }
+        }
+        mean
+    };
+    let k_h_beta = |p: &GearPair| {
+        let mean = face_load(p);
+        let average = mean.iter().sum::<f64>() / mean.len() as f64;
+        mean.iter().fold(0.0f64, |m, &w| m.max(w)) / average
+    };
+    let specific_load = torque / plain.gear1.pitch_radius_m / (plain.face_width_m * 1e3);
+    let iso = |f_um: f64| gearfmu::dynamics::iso6336::face_load_factor_k_h_beta(&plain, f_um, specific_load);
+    let even = face_load(&plain);
+    let scale = even.iter().fold(0.0f64, |m, &w| m.max(w));
+    for (a, b) in even.iter().zip(even.iter().rev()) {
+        assert!((a - b).abs() < 1e-6 * scale, "aligned spur pair, not symmetric: {even:?}");
+    }
+    let aligned = k_h_beta(&plain);
+    let ten = k_h_beta(&misaligned(10.0, ""));
+    let twenty = k_h_beta(&misaligned(20.0, ""));
+    let crowned = k_h_beta(&misaligned(20.0, "[gear1.modification]\nlead_crowning_um = 10.0\n"));
+    println!(
+        "K_Hβ at 185 N·m: aligned {aligned:.3}; 10 µm {ten:.3} (ISO {:.3}); 20 µm {twenty:.3} (ISO {:.3}); 20 µm with 10 µm lead crowning {crowned:.3} (ISO, F_βy halved, {:.3})",
+        iso(10.0),
+        iso(20.0),
+        iso(10.0)
+    );
+    assert!(aligned < ten && ten < twenty, "{aligned} {ten} {twenty}");
+    assert!(crowned < twenty, "{crowned} {twenty}");
 }

@@ -311,7 +311,8 @@ enum Command {
         eq20: bool,
         #[command(flatten)]
         resolution: Resolution,
-        /// One row per case: method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact
+        /// One row per case: method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact,
+        /// k_h_beta, then the load per face width of each axial section (line_load_<s>_n_per_mm)
         #[arg(long)]
         csv: Option<PathBuf>,
         /// STE (µm) against θ₂, one curve per torque, contact zones marked. Drawn by
@@ -392,6 +393,8 @@ fn ste_command(
         Method::Penalty { .. } => "penalty",
     };
     let b_mm = pair.face_width_m * 1e3;
+    let layers = &reduced.gears[0].flank.layer_z_m;
+    let penalty = matches!(method, Method::Penalty { .. });
     for &t in torques {
         let ste: Vec<f64> = cases.iter().filter(|c| c.torque_nm == t).map(|c| c.ste_m * 1e6).collect();
         let mean = ste.iter().sum::<f64>() / ste.len() as f64;
@@ -415,6 +418,34 @@ fn ste_command(
             hi - lo,
             stiffness / iso,
             stiffness_mean_of_positions / iso
+        );
+        // The face load factor, and ISO 6336-1's from the misalignment (f_sh = 0: the FE gears
+        // sit on rigid shafts, clamped at their bores; lead crowning halves F_βx, ISO's B₂ = 0.5).
+        // ISO's K_Hβ is the face's load distribution: each section's load per face width averaged
+        // over the positions of the mesh cycle (a helical pair's contact lines end at different z
+        // at each instant, which alone makes one position's factor 1.5 on an aligned pair).
+        let at_t: Vec<_> = cases.iter().filter(|c| c.torque_nm == t).collect();
+        let (mut mean_load, mut lengths) = (Vec::new(), Vec::new());
+        for c in &at_t {
+            let (load, l) = c.face_load(layers, penalty);
+            if mean_load.is_empty() {
+                (mean_load, lengths) = (vec![0.0; load.len()], l);
+            }
+            for (m, w) in mean_load.iter_mut().zip(&load) {
+                *m += w / at_t.len() as f64;
+            }
+        }
+        let face: f64 = lengths.iter().sum();
+        let average = mean_load.iter().zip(&lengths).map(|(w, l)| w * l).sum::<f64>() / face;
+        let k_mean = mean_load.iter().fold(0.0f64, |m, &w| m.max(w)) / average;
+        let k_max = at_t.iter().map(|c| c.face_load_factor(layers, penalty)).fold(0.0f64, f64::max);
+        let crowned = pair.gear1.modification.lead_crowning_m > 0.0 || pair.gear2.modification.lead_crowning_m > 0.0;
+        let f_beta_y_um = pair.misalignment_m.abs() * 1e6 * if crowned { 0.5 } else { 1.0 };
+        println!(
+            "  face load factor K_Hβ (largest over mean load per face width, over the mesh cycle): {k_mean:.3} (one position's at most {k_max:.3}); \
+             ISO 6336-1 (F_βy = {f_beta_y_um:.1} µm from mounting.misalignment_um{}): {:.3}",
+            if crowned { " halved by the lead crowning" } else { "" },
+            iso6336::face_load_factor_k_h_beta(pair, f_beta_y_um, specific_load)
         );
         // Zone by zone (spur): the single-zone stiffness and the double/single ratio carry the
         // bodies' torsion, which the bore radii set; the zone contrast does not.
@@ -447,12 +478,28 @@ fn ste_command(
         sweep / cases.len() as f64 * rayon::current_num_threads() as f64,
         rayon::current_num_threads()
     );
-    let mut table = String::from("method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact\n");
+    // One column per axial section (PMOR-Hertz) or node layer (penalty): the load per face width.
+    let sections = if penalty { layers.len() } else { layers.len() - 1 };
+    let mut table = String::from("method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact,k_h_beta");
+    for s in 0..sections {
+        table += &format!(",line_load_{s}_n_per_mm");
+    }
+    table.push('\n');
     for c in &cases {
         table += &format!(
-            "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{}\n",
-            c.torque_nm, c.theta_rad[0], c.theta_rad[1], c.ste_m, c.mesh_force_n, c.pairs_in_contact
+            "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{},{:.6}",
+            c.torque_nm,
+            c.theta_rad[0],
+            c.theta_rad[1],
+            c.ste_m,
+            c.mesh_force_n,
+            c.pairs_in_contact,
+            c.face_load_factor(layers, penalty)
         );
+        for w in c.face_load(layers, penalty).0 {
+            table += &format!(",{:.6e}", w * 1e-3);
+        }
+        table.push('\n');
     }
     if let Some(path) = &out.csv {
         std::fs::write(path, &table).with_context(|| format!("cannot write {}", path.display()))?;

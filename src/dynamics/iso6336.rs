@@ -68,6 +68,20 @@ pub fn single_stiffness_at(pair: &GearPair, specific_load_n_per_mm: f64) -> f64 
     single_stiffness(pair) * light_load_factor(specific_load_n_per_mm)
 }
 
+/// The face load factor K_Hβ of ISO 6336-1 (method C, §7.6) from the effective equivalent
+/// misalignment F_βy (µm) at a specific load F_m/b (N/mm): with c_γβ = 0.85·c_γα,
+/// K_Hβ = 1 + F_βy·c_γβ/(2·F_m/b) where that is ≤ 2 (the contact covers the whole face), else
+/// √(2·F_βy·c_γβ/(F_m/b)) (part of the face unloaded).
+pub fn face_load_factor_k_h_beta(pair: &GearPair, f_beta_y_um: f64, specific_load_n_per_mm: f64) -> f64 {
+    let c_gamma_beta = 0.85 * mesh_stiffness_c_gamma_alpha_at(pair, specific_load_n_per_mm);
+    let x = f_beta_y_um * c_gamma_beta / specific_load_n_per_mm;
+    if 1.0 + 0.5 * x <= 2.0 {
+        1.0 + 0.5 * x
+    } else {
+        (2.0 * x).sqrt()
+    }
+}
+
 /// Double-contact stiffness over c′ that c_γα implies for a spur pair whose stiffness is c′ over
 /// the single-contact share 2 − ε_α of a pitch and c_d over the double-contact share ε_α − 1:
 /// c′(2 − ε_α) + c_d(ε_α − 1) = c′(0.75 ε_α + 0.25) gives c_d = 1.75 c′ for every ε_α.

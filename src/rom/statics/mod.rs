@@ -70,6 +70,36 @@ pub struct StaticCase {
 }
 
 impl StaticCase {
+    /// The load per unit face width (N/m) along the face, summed over the tooth pairs, and the
+    /// axial length each value stands for. `layer_z_m` are the flank grid's node layers: a
+    /// PMOR-Hertz element is a section between two layers; a penalty element (`penalty`) is a
+    /// node on a layer, the end layers with half a spacing.
+    pub fn face_load(&self, layer_z_m: &[f64], penalty: bool) -> (Vec<f64>, Vec<f64>) {
+        let n = layer_z_m.len();
+        let lengths: Vec<f64> = if penalty {
+            let dz = (layer_z_m[n - 1] - layer_z_m[0]) / (n - 1) as f64;
+            (0..n).map(|k| if k == 0 || k == n - 1 { 0.5 * dz } else { dz }).collect()
+        } else {
+            layer_z_m.windows(2).map(|w| w[1] - w[0]).collect()
+        };
+        let mut load = vec![0.0; lengths.len()];
+        for e in &self.elements {
+            load[e.section] += e.force_n;
+        }
+        for (w, l) in load.iter_mut().zip(&lengths) {
+            *w /= l;
+        }
+        (load, lengths)
+    }
+
+    /// The face load factor K_Hβ: the largest load per unit face width over its mean.
+    pub fn face_load_factor(&self, layer_z_m: &[f64], penalty: bool) -> f64 {
+        let (load, lengths) = self.face_load(layer_z_m, penalty);
+        let total: f64 = load.iter().zip(&lengths).map(|(w, l)| w * l).sum();
+        let face: f64 = lengths.iter().sum();
+        load.iter().fold(0.0f64, |m, &w| m.max(w)) / (total / face)
+    }
+
     /// Normal force carried by each tooth pair, by pair index.
     pub fn force_per_pair(&self) -> Vec<(i64, f64)> {
         let mut out: Vec<(i64, f64)> = Vec::new();
