@@ -9,14 +9,12 @@
 //!   STE ≈ F/(2k): twice it is F/k), independent of the relieved runs.
 //! - A bad modification names its field and rule (`gear::modification`'s unit tests cover each).
 
+mod common;
+
 use gearfmu::contact::hertz::ApproachLaw;
-use gearfmu::contact::mesh_kinematics::{Flank, PairPlacement};
-use gearfmu::fe::clamped_gear::ClampedGear;
-use gearfmu::fe::gear_mesh::MeshSpec;
-use gearfmu::fe::hex8::Formulation;
+use gearfmu::contact::mesh_kinematics::PairPlacement;
 use gearfmu::gear::{GearPair, PairSpec};
-use gearfmu::rom::flank::FlankGrid;
-use gearfmu::rom::reductor::{pmor_hertz, ReducedGear};
+use gearfmu::rom::reductor::ReducedGear;
 use gearfmu::rom::statics::{ContactModel, StaticModel};
 use std::f64::consts::PI;
 
@@ -40,22 +38,8 @@ fn long_tip_relief(um: f64, p: &GearPair) -> String {
         .collect()
 }
 
-/// Both gears reduced by PMOR-Hertz (h = 3 mm, p_en = 99.9 %): the reduction does not depend on
-/// the modification (the FE gears are the unmodified ones; δ enters the gap only).
 fn reduce(p: &GearPair) -> [ReducedGear; 2] {
-    let place = PairPlacement::new(p);
-    let spec = MeshSpec::default();
-    let mut hertz = Vec::new();
-    for (i, gear) in [&p.gear1, &p.gear2].into_iter().enumerate() {
-        let model = ClampedGear::new(p, gear, &spec, Formulation::IncompatibleModes);
-        let factor = model.factorize().unwrap();
-        let z = gear.teeth as i64;
-        let teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
-        let grid = FlankGrid::contact_flank(&model.mesh, i, Flank::Drive, &teeth).unwrap();
-        let (reduced, _, _) = pmor_hertz(&model, &factor, grid, 3e-3, 0.999, |_| {}).unwrap();
-        hertz.push(reduced);
-    }
-    hertz.try_into().unwrap()
+    common::reduce_pmor_hertz(p)
 }
 
 /// Closed form: along the path of contact at zero load, the relieved pair's rigid penetration is

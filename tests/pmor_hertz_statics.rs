@@ -22,16 +22,13 @@
 //! compared at the paper's flank resolution in BENCHMARKS.md ("Both methods at the paper's flank
 //! resolution").
 
+mod common;
+
 use gearfmu::contact::hertz::ApproachLaw;
-use gearfmu::contact::mesh_kinematics::{Flank, PairPlacement};
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::LumpedMesh;
-use gearfmu::fe::clamped_gear::ClampedGear;
-use gearfmu::fe::gear_mesh::MeshSpec;
-use gearfmu::fe::hex8::Formulation;
 use gearfmu::gear::{GearPair, PairSpec};
-use gearfmu::rom::flank::FlankGrid;
-use gearfmu::rom::reductor::{pmor_hertz, ReducedGear};
+use gearfmu::rom::reductor::ReducedGear;
 use gearfmu::rom::statics::{ContactModel, StaticModel};
 use std::f64::consts::PI;
 
@@ -52,22 +49,8 @@ fn textbook_spur_contact_ratio(p: &GearPair) -> f64 {
     ((ra1 * ra1 - rb1 * rb1).sqrt() + (ra2 * ra2 - rb2 * rb2).sqrt() - a * alpha.sin()) / (PI * m * alpha.cos())
 }
 
-/// Both gears reduced by PMOR-Hertz (h = 3 mm, p_en = 99.9 %).
 fn reduce(p: &GearPair) -> [ReducedGear; 2] {
-    let place = PairPlacement::new(p);
-    let spec = MeshSpec::default();
-    let mut hertz = Vec::new();
-    for (i, gear) in [&p.gear1, &p.gear2].into_iter().enumerate() {
-        let model = ClampedGear::new(p, gear, &spec, Formulation::IncompatibleModes);
-        let factor = model.factorize().unwrap();
-        let z = gear.teeth as i64;
-        let teeth: Vec<usize> = place.pairs_in_reach().map(|j| j.rem_euclid(z) as usize).collect();
-        let grid = FlankGrid::contact_flank(&model.mesh, i, Flank::Drive, &teeth).unwrap();
-        let (reduced, _, report) = pmor_hertz(&model, &factor, grid, 3e-3, 0.999, |_| {}).unwrap();
-        println!("gear {}: n_c {} → n_sv {} (retained {:.4})", i + 1, report.n_c, report.n_sv, report.retained);
-        hertz.push(reduced);
-    }
-    hertz.try_into().unwrap()
+    common::reduce_pmor_hertz(p)
 }
 
 /// Per angle of the sweep: (STE, pairs in contact) of PMOR-Hertz and of the lumped law.
