@@ -117,8 +117,8 @@ fn read_curve(path: &Path) -> Result<SpeedTorqueCurve> {
     SpeedTorqueCurve::new(speed, torque).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
-/// Writes one element FMU.
-pub fn write_element_fmu(output: &Path, name: &str, element: Element, so: &[u8]) -> Result<()> {
+/// One element FMU, as the bytes of its archive.
+pub fn element_fmu(name: &str, element: Element, so: &[u8]) -> Result<Vec<u8>> {
     let kind = ModelKind::Element(element.clone());
     let guid = ModelFile::compute_guid(gearfmu::dynamics::elements::ELEMENTS_TOML, name, &kind);
     let starts = element.parameter_starts();
@@ -144,7 +144,7 @@ pub fn write_element_fmu(output: &Path, name: &str, element: Element, so: &[u8])
     )
     .map_err(anyhow::Error::msg)?;
     let file = ModelFile { guid, pair_name: name.to_string(), model: kind };
-    crate::write_fmu_archive(output, &xml, &file, so)
+    crate::fmu_archive(&xml, &file, so)
 }
 
 /// The demo drivetrain's elements (examples/drivetrain.py's defaults).
@@ -262,18 +262,13 @@ pub fn write_ssp(output: &Path, gear_fmu: &Path, o: &DrivetrainOptions, so: &[u8
             e.check().map_err(|e| anyhow::anyhow!("{}: {e}", c.name))?;
         }
     }
-    let dir = tempdir_for(output)?;
     let out = std::fs::File::create(output).with_context(|| format!("cannot create {}", output.display()))?;
     let mut zip = zip::ZipWriter::new(out);
     let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
     for c in &components {
         let bytes = match &c.element {
             None => gear_bytes.clone(),
-            Some(e) => {
-                let path = dir.join(format!("{}.fmu", c.name));
-                write_element_fmu(&path, c.name, e.clone(), so)?;
-                std::fs::read(&path)?
-            }
+            Some(e) => element_fmu(c.name, e.clone(), so)?,
         };
         zip.start_file(format!("resources/{}.fmu", c.name), options)?;
         zip.write_all(&bytes)?;
@@ -281,17 +276,8 @@ pub fn write_ssp(output: &Path, gear_fmu: &Path, o: &DrivetrainOptions, so: &[u8
     zip.start_file("SystemStructure.ssd", options)?;
     zip.write_all(system_structure(&components, o).as_bytes())?;
     zip.finish()?;
-    std::fs::remove_dir_all(&dir).ok();
     println!("wrote {} (motor → shaft_1 → gear_pair → shaft_2 → load)", output.display());
     Ok(())
-}
-
-/// A scratch folder beside the output (removed after use).
-fn tempdir_for(output: &Path) -> Result<PathBuf> {
-    let parent = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let dir = parent.join(format!(".fmu-build-ssp-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    Ok(dir)
 }
 
 /// SystemStructure.ssd (SSP 1.0): the components with their connectors and, per element, its

@@ -723,10 +723,15 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
     Ok(())
 }
 
-/// The .fmu archive: modelDescription.xml, the binary and the model file.
+/// Writes the .fmu archive (`fmu_archive`).
 fn write_fmu_archive(output: &Path, xml: &str, file: &ModelFile, so: &[u8]) -> Result<()> {
-    let out = std::fs::File::create(output).with_context(|| format!("cannot create {}", output.display()))?;
-    let mut zip = zip::ZipWriter::new(out);
+    let bytes = fmu_archive(xml, file, so)?;
+    std::fs::write(output, bytes).with_context(|| format!("cannot create {}", output.display()))
+}
+
+/// The .fmu archive's bytes: modelDescription.xml, the binary and the model file.
+fn fmu_archive(xml: &str, file: &ModelFile, so: &[u8]) -> Result<Vec<u8>> {
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     zip.start_file("modelDescription.xml", options)?;
     zip.write_all(xml.as_bytes())?;
@@ -734,8 +739,7 @@ fn write_fmu_archive(output: &Path, xml: &str, file: &ModelFile, so: &[u8]) -> R
     zip.write_all(so)?;
     zip.start_file(format!("resources/{}", gearfmu::model_file::FILE_NAME), options)?;
     zip.write_all(&file.to_bytes())?;
-    zip.finish()?;
-    Ok(())
+    Ok(zip.finish()?.into_inner())
 }
 
 /// The contact depth h (m): `--depth-mm` where given, else the pair's default (half the module).
@@ -1301,7 +1305,8 @@ fn main() {
             check_output_folder(&output)?;
             let element = options.element(kind)?;
             let name = name.unwrap_or_else(|| element.kind().to_string());
-            drivetrain::write_element_fmu(&output, &name, element, &library_bytes(library)?)?;
+            let bytes = drivetrain::element_fmu(&name, element, &library_bytes(library)?)?;
+            std::fs::write(&output, bytes).with_context(|| format!("cannot create {}", output.display()))?;
             println!("wrote {}", output.display());
             Ok(())
         })(),

@@ -150,19 +150,14 @@ impl Element {
 
 /// The rule of each parameter (by the variable's name).
 fn check_parameter(kind: &str, name: &str, value: f64) -> Result<(), String> {
-    let rule_ok = match name {
-        "J" | "max_step" => value.is_finite() && value > 0.0 && value.is_normal(),
-        "c" | "d" | "viscous" | "quadratic" | "t_ramp" => value.is_finite() && value >= 0.0,
-        _ => value.is_finite(),
+    let (ok, rule) = match name {
+        "J" | "max_step" => (value.is_finite() && value > 0.0 && value.is_normal(), "a finite number > 0"),
+        "c" | "d" | "viscous" | "quadratic" | "t_ramp" => (value.is_finite() && value >= 0.0, "a finite number ≥ 0"),
+        _ => (value.is_finite(), "finite"),
     };
-    if rule_ok {
+    if ok {
         Ok(())
     } else {
-        let rule = match name {
-            "J" | "max_step" => "a finite number > 0",
-            "c" | "d" | "viscous" | "quadratic" | "t_ramp" => "a finite number ≥ 0",
-            _ => "finite",
-        };
         Err(format!("{kind} parameter {name} must be {rule}, got {value:e}"))
     }
 }
@@ -384,10 +379,13 @@ impl Model for ElementFmu {
             return Ok(s.inputs[vr as usize]);
         }
         if v.causality == "parameter" {
-            let mut copy = s.clone();
-            return parameter_mut(&mut copy, &v.name)
-                .map(|x| *x)
-                .ok_or_else(|| format!("{} has no physics behind it", v.name));
+            // The start values live in the state, the others in its element (as the build's).
+            let value = match v.name.as_str() {
+                "phi_start" | "phi_rel0" => Some(s.start[0]),
+                "w_start" => Some(s.start[1]),
+                name => s.element.parameter_starts().into_iter().find(|(n, _)| *n == name).map(|(_, x)| x),
+            };
+            return value.ok_or_else(|| format!("{} has no physics behind it", v.name));
         }
         Ok(match v.name.as_str() {
             "phi" => s.phi,
