@@ -149,6 +149,10 @@ pub struct PairPlacement {
     hand: f64,
     /// Whether the pair carries a flank modification or a misalignment (`modification_m`).
     modified: bool,
+    /// The most that the modifications can close a gap (m): the reliefs and crownings only
+    /// remove material, but a helix slope deviation and a misalignment add it at one face end,
+    /// by at most half their amount each (`flank_can_close`).
+    modification_closing_m: f64,
     /// The smallest rate at which any candidate's rigid penetration follows r_b1·θ₁
     /// (`flank_can_close`).
     smallest_arm_ratio: f64,
@@ -189,6 +193,10 @@ impl PairPlacement {
             modified: pair.gear1.modification.is_some()
                 || pair.gear2.modification.is_some()
                 || pair.misalignment_m != 0.0,
+            modification_closing_m: 0.5
+                * (pair.gear1.modification.helix_slope_m.abs()
+                    + pair.gear2.modification.helix_slope_m.abs()
+                    + pair.misalignment_m.abs()),
             smallest_arm_ratio: 0.0,
             thinning_loa_m: pair.backlash_loa_m - profile_backlash,
             pair: pair.clone(),
@@ -207,7 +215,7 @@ impl PairPlacement {
     /// The smallest d(rigid penetration)/d(r_b1θ₁) of any candidate: cos β_b on the line of
     /// action and for gear 2's tip corner (exact), and for gear 1's tip corner the arm of gear
     /// 2's flank normal, which shrinks as the corner runs past the end of the path; scanned over
-    /// the corner's whole reach (`contact::candidate_pairs`: 0.6 base pitch and the helix's
+    /// the corner's whole reach (`candidate_pairs`: 0.6 base pitch and the helix's
     /// half-face shift past the end) at 200 points.
     fn scan_smallest_arm_ratio(&self) -> f64 {
         let p = &self.pair;
@@ -229,15 +237,16 @@ impl PairPlacement {
     /// brings no flank point more than `reach_m` nearer: false when the pose searched is backed
     /// off (TE < 0 there) so far that every candidate's rigid gap exceeds the reach. At TE = 0
     /// no candidate penetrates (the conjugate ones touch, the corners are clear: no tip
-    /// interference), and backing gear 1 off by r_b1·Δθ opens each by at least the smallest arm
-    /// ratio times it. Skipping such a flank changes no result; it saves its whole search.
+    /// interference) but where a modification adds material (at most `modification_closing_m`),
+    /// and backing gear 1 off by r_b1·Δθ opens each by at least the smallest arm ratio times it.
+    /// Skipping such a flank changes no result; it saves its whole search.
     pub fn flank_can_close(&self, flank: Flank, theta: [f64; 2], reach_m: f64) -> bool {
         let searched = self.searched_angles(flank, theta);
         let te = self.pair.gear1.base_radius_m * searched[0] - self.pair.gear2.base_radius_m * searched[1];
         // Wrapped to the nearest tooth: the pair index absorbs whole base pitches.
         let pb = self.pair.base_pitch_m;
         let te = te - pb * (te / pb).round();
-        te >= 0.0 || self.smallest_arm_ratio * te + reach_m > 0.0
+        te >= 0.0 || self.smallest_arm_ratio * te + reach_m + self.modification_closing_m > 0.0
     }
 
     fn gear(&self, i: usize) -> &Gear {
@@ -326,6 +335,80 @@ impl PairPlacement {
             d += m2.deviation_m(p.gear2.roll_length_m(radius_m[1]), -z);
         }
         d
+    }
+
+    /// d(rigid penetration)/dθ of a conjugate contact through the modifications alone (per
+    /// gear, in the searched pose's angles): each gear's contact point rolls along its own flank
+    /// with its own angle (ρ₁ = u₁, dρ₁/dθ₁ = r_b1; ρ₂ = L − u, dρ₂/dθ₂ = −r_b2), and the
+    /// penetration loses what the flank lost there, δᵢ(ρᵢ). The axial part (crowning, slope,
+    /// misalignment) does not move with the angles: a section keeps its z.
+    pub fn conjugate_modification_slopes(&self, radius_m: [f64; 2]) -> [f64; 2] {
+        if !self.modified {
+            return [0.0; 2];
+        }
+        let (g1, g2) = (&self.pair.gear1, &self.pair.gear2);
+        let slope = |g: &Gear, r: f64| if g.modification.is_some() { g.modification.slope_per_roll(g.roll_length_m(r)) } else { 0.0 };
+        [-slope(g1, radius_m[0]) * g1.base_radius_m, slope(g2, radius_m[1]) * g2.base_radius_m]
+    }
+
+    /// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂ (of the pose
+    /// searched): 0.6 base pitch past each end of the path, and the helix's half-face shift.
+    pub fn candidate_pairs(&self, theta2: f64) -> std::ops::RangeInclusive<i64> {
+        let p = &self.pair;
+        let pb = p.base_pitch_m;
+        let half_b = 0.5 * p.face_width_m * p.base_helix_angle_rad.tan().abs();
+        let u0 = p.pitch_point_m() + p.gear2.base_radius_m * theta2;
+        let lo = ((p.path_start_m - 0.6 * pb - half_b - u0) / pb).ceil() as i64;
+        let hi = ((p.path_end_m + 0.6 * pb + half_b - u0) / pb).floor() as i64;
+        lo..=hi
+    }
+
+    /// Gear 1's angle at which `flank` first touches anywhere along the face (the sections'
+    /// mid-planes `z_m`, of the pose where that flank drives) with gear 2 at θ₂ and both gears
+    /// rigid: the no-load transmission error's pose. The rigid penetration grows with gear 1's
+    /// turn into the flank at a rate between the smallest arm ratio and cos β_b (per r_b1·θ₁),
+    /// so a step of −penetration/cos β_b never overshoots and the iteration closes in from the
+    /// open side. `None` if no candidate lies on both active profiles.
+    pub fn first_touch_angle1(&self, flank: Flank, theta2: f64, z_m: &[f64]) -> Option<f64> {
+        let p = &self.pair;
+        let (rb1, rb2) = (p.gear1.base_radius_m, p.gear2.base_radius_m);
+        let start = match flank {
+            Flank::Drive => rb2 * theta2,
+            Flank::Coast => rb2 * theta2 - p.backlash_loa_m,
+        };
+        let mut theta1 = start / rb1;
+        let rate = p.base_helix_angle_rad.cos() * rb1;
+        for _ in 0..200 {
+            let theta = [theta1, theta2];
+            let searched = self.searched_angles(flank, theta);
+            let deepest = self
+                .candidate_pairs(searched[1])
+                .flat_map(|j| z_m.iter().enumerate().map(move |(s, &z)| (j, s, z)))
+                .filter_map(|(j, s, z)| self.flank_contact(flank, theta, j, s, z))
+                .map(|c| c.rigid_penetration_m)
+                .fold(f64::NEG_INFINITY, f64::max);
+            if !deepest.is_finite() {
+                return None;
+            }
+            if deepest.abs() < 1e-13 {
+                break;
+            }
+            theta1 -= flank.sign() * deepest / rate;
+        }
+        Some(theta1)
+    }
+
+    /// What the modifications shift the rigid first touch of `flank` by, along the line of
+    /// action (m, r_b1·Δθ₁ at gear 2's θ₂): positive on the drive flanks where they open the
+    /// gap, negative on the coast flanks likewise (gear 1 turns further back to touch). Zero
+    /// for an unmodified pair, whose drive flanks touch at TE = 0.
+    pub fn modification_opening_m(&self, flank: Flank, theta2: f64, z_m: &[f64]) -> Option<f64> {
+        if !self.modified {
+            return Some(0.0);
+        }
+        let plain = PairPlacement { modified: false, ..self.clone() };
+        let rb1 = self.pair.gear1.base_radius_m;
+        Some(rb1 * (self.first_touch_angle1(flank, theta2, z_m)? - plain.first_touch_angle1(flank, theta2, z_m)?))
     }
 
     /// Whether the pair carries any flank modification or misalignment.

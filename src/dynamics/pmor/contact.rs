@@ -103,8 +103,14 @@ struct Located {
 
 impl Located {
     /// The same contact in another axial section (a spur pair's search does not depend on z).
-    fn in_section(&self, flank: Flank, search_section: usize, z: f64, sections: usize) -> Located {
+    /// Only the modifications' axial part (crowning, slope, end relief, misalignment) changes
+    /// with z; a deviation is a profile part plus an axial part (`FlankModification::deviation_m`),
+    /// so the change is the same for every candidate and the choice among them stands.
+    fn in_section(&self, place: &PairPlacement, flank: Flank, search_section: usize, z: f64, sections: usize) -> Located {
         let mut c = self.c;
+        if place.is_modified() {
+            c.rigid_penetration_m += place.modification_m(c.radius_m, c.z_m) - place.modification_m(c.radius_m, z);
+        }
         c.section = search_section;
         c.z_m = z;
         let section = match flank {
@@ -230,11 +236,14 @@ fn transverse_radius(c: &SectionContact) -> f64 {
 /// gear's contact point is its own crossing of the line of action (`section_contact`): gear 1's
 /// at u₁ from T₁ follows θ₁ alone (du₁/dθ₁ = r_b1), gear 2's at v = L − u from T₂ follows θ₂
 /// alone (dv/dθ₂ = −r_b2); their radii and radii of curvature (R₁ = u₁, R₂ = v) travel with
-/// them. The search pose turns as ±θ (`Flank::sign`: the half turn reverses the angles): the
-/// rigid approach and the points' travel follow it, the shapes' turning (∂/∂ϑ at a fixed point)
-/// follows the gear itself.
+/// them, and so do the flank modifications there (`conjugate_modification_slopes`: without
+/// them a tip relief's ramp would be a force the energy balance does not book). The search
+/// pose turns as ±θ (`Flank::sign`: the half turn reverses the angles): the rigid approach and
+/// the points' travel follow it, the shapes' turning (∂/∂ϑ at a fixed point) follows the gear
+/// itself.
 fn conjugate_slopes(
     model: &PmorModel,
+    place: &PairPlacement,
     flank: Flank,
     c: &SectionContact,
     e: &[ElasticApproach; 2],
@@ -243,25 +252,14 @@ fn conjugate_slopes(
     let sign = flank.sign();
     let [u1, v] = c.curvature_radius_m;
     let radius_slope = [u1 * rb[0] / c.radius_m[0], -v * rb[1] / c.radius_m[1]];
+    let relief = place.conjugate_modification_slopes(c.radius_m);
     let alpha = [
-        sign * (c.arm_ratio * rb[0] + e[0].per_radius * radius_slope[0]) + e[0].per_angle_m,
-        sign * (-c.arm_ratio * rb[1] + e[1].per_radius * radius_slope[1]) + e[1].per_angle_m,
+        sign * (c.arm_ratio * rb[0] + relief[0] + e[0].per_radius * radius_slope[0]) + e[0].per_angle_m,
+        sign * (-c.arm_ratio * rb[1] + relief[1] + e[1].per_radius * radius_slope[1]) + e[1].per_angle_m,
     ];
     // R = u₁v/(u₁ + v): ∂R/∂u₁ = v²/(u₁ + v)², ∂R/∂v = u₁²/(u₁ + v)².
     let sum2 = (u1 + v).powi(2);
     (alpha, [sign * rb[0] * v * v / sum2, -sign * rb[1] * u1 * u1 / sum2])
-}
-
-/// The tooth pairs j whose contact can lie near the path at gear 2's angle θ₂ (of the pose
-/// searched).
-pub fn candidate_pairs(model: &PmorModel, theta2: f64) -> std::ops::RangeInclusive<i64> {
-    let p = &model.pair;
-    let pb = p.base_pitch_m;
-    let half_b = 0.5 * p.face_width_m * p.base_helix_angle_rad.tan().abs();
-    let u0 = p.pitch_point_m() + p.gear2.base_radius_m * theta2;
-    let lo = ((p.path_start_m - 0.6 * pb - half_b - u0) / pb).ceil() as i64;
-    let hi = ((p.path_end_m + 0.6 * pb + half_b - u0) / pb).floor() as i64;
-    lo..=hi
 }
 
 /// Where the contact force enters the elastic coordinates.
@@ -318,7 +316,7 @@ pub fn contact_loads(
         if !place.flank_can_close(flank, theta, reach) {
             continue; // backed off beyond the deformation's reach (the coast flanks, mostly)
         }
-        for j in candidate_pairs(model, searched[1]) {
+        for j in place.candidate_pairs(searched[1]) {
             let mut pair_force = 0.0;
             // A spur pair's sections differ only in z, which its contact search does not read
             // (no helix, no twist): one search serves them all.
@@ -326,7 +324,7 @@ pub fn contact_loads(
             for s in 0..sections {
                 let z_mid = 0.5 * (layers[s] + layers[s + 1]);
                 let found = match &spur_search {
-                    Some(first) => first.as_ref().map(|at| at.in_section(flank, s, z_mid, sections)),
+                    Some(first) => first.as_ref().map(|at| at.in_section(place, flank, s, z_mid, sections)),
                     None => locate(place, flank, theta, j, s, z_mid, sections),
                 };
                 let Some(at) = found else { continue };
@@ -389,7 +387,7 @@ pub fn contact_loads(
                 // ∂W/∂R for the transverse R (the law's R is R/cos β_b).
                 let dw_dr = law.potential_radius_derivative(force) * law.effective_radius() / transverse_radius(c);
                 let (alpha_slope, radius_slope) = match c.kind {
-                    ContactKind::Conjugate => conjugate_slopes(model, flank, c, &e),
+                    ContactKind::Conjugate => conjugate_slopes(model, place, flank, c, &e),
                     ContactKind::TipOfGear1 | ContactKind::TipOfGear2 => {
                         let mut slopes = ([0.0; 2], [0.0; 2]);
                         for i in 0..2 {

@@ -13,6 +13,7 @@
 
 use super::integrator::Integrator;
 use super::{PmorDynamics, PmorState};
+use crate::contact::mesh_kinematics::Flank;
 use nalgebra::{Complex, DMatrix, DVector};
 
 /// The load of the step-limit linearization as a multiple of the largest ROM torque
@@ -127,12 +128,25 @@ pub fn static_equilibrium(
     let model = dynamics.model;
     let rb = [model.pair.gear1.base_radius_m, model.pair.gear2.base_radius_m];
     let torque2_start = -torque1_nm * rb[1] / rb[0];
+    // Where the flank modifications leave the rigid flanks apart at the guess (a relief, a
+    // crowning open the gap: no contact, a singular Jacobian), the guess moves by their opening
+    // at this angle (`PairPlacement::modification_opening_m`) onto the flank the torque loads.
+    let mut opening = 0.0;
+    if dynamics.place.is_modified() {
+        let s = model.initial_state([(rb[1] * theta2 + te_guess_m) / rb[0], theta2], [0.0; 2]);
+        if dynamics.outputs(&s).map_or(false, |o| o.contact.normal_force_n == 0.0) {
+            let flank = if torque1_nm < 0.0 { Flank::Coast } else { Flank::Drive };
+            let layers = &model.gears[0].flank(flank).grid.layer_z_m;
+            let z_mid: Vec<f64> = layers.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+            opening = dynamics.place.modification_opening_m(flank, theta2, &z_mid).unwrap_or(0.0);
+        }
+    }
     // The start: the rigid pair at the guessed TE. Where that guess, all of it taken by the Hertz
     // law at undeformed teeth, is beyond the law's range (a small pair: the half-width rule), the
     // guess is halved until the start evaluates; Newton's steps do the rest.
     let mut guess = te_guess_m;
     let (mut s, mut y) = loop {
-        let s = model.initial_state([(rb[1] * theta2 + guess) / rb[0], theta2], [0.0; 2]);
+        let s = model.initial_state([(rb[1] * theta2 + opening + guess) / rb[0], theta2], [0.0; 2]);
         let y = dynamics.pack(&s);
         match dynamics.rhs(&y, s.anchor, [torque1_nm, torque2_start]) {
             Ok(_) => break (s, y),
