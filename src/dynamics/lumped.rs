@@ -2,15 +2,16 @@
 //! stiffness varies with the roll position, with backlash, contact loss and back-flank contact.
 //!
 //! Mesh deflection δ = TE = r_b1·θ₁ − r_b2·θ₂ (design §3), roll position ξ = r_b1·θ₁ + ξ₀.
-//! The mesh is a load-dependent force law F(δ, ξ) (`mesh_law`) on the drive flank (δ > 0) and
-//! its mirror on the coast flank (δ < −j, j the backlash); in between the flanks do not touch.
+//! The mesh is a load-dependent force law F(δ, ξ) (`mesh_law`) on the drive flank (δ > δ₀(ξ),
+//! the no-load TE: zero unless the flanks are modified) and its mirror on the coast flank
+//! (δ < −j − δ₀, j the backlash); in between the flanks do not touch.
 //! The law derives from a potential V(δ, ξ) and the generalized forces are −∂V/∂θ, so the model
 //! conserves energy exactly: besides the mesh force F = ∂V/∂δ it carries the torque r_b1·(−∂V/∂ξ)
 //! that the roll-dependent stiffness exerts on the driver (−r_b1·½K′δ² for a linear law). A tooth
 //! pair entering contact is a steep but continuous change of the law over one table interval; its
 //! work is this torque. Damping c·δ̇ acts only while a flank is in contact; a flank never pulls.
 
-use super::mesh_law::MeshLaw;
+use super::mesh_law::{MeshForce, MeshLaw};
 use super::mesh_stiffness::{force_levels, static_deflection_table};
 use crate::gear::GearPair;
 use serde::{Deserialize, Serialize};
@@ -93,6 +94,8 @@ impl LumpedMesh {
         let roll_offset = pair.pitch_point_m() - pair.path_start_m;
         // Coast flank: the mirror image of the drive flank about the reference position (symmetric
         // teeth). The phase between drive and coast contact, set by tooth thickness, is neglected.
+        // A modification mirrors with it: the spec gives each gear one for both its flanks (a
+        // helix slope or a misalignment, odd in z, is mirrored in roll only).
         let offset_index = (roll_offset / pair.base_pitch_m * n as f64).round() as usize;
         let mirror = |i: usize| (2 * offset_index + 2 * n - i) % n;
         let k = levels.len();
@@ -255,16 +258,20 @@ impl<'a> LumpedModel<'a> {
         let xi = m.base_radius_1_m * s.theta_1 + m.roll_offset_m;
         let c = self.damping_n_s_per_m;
         let mut out = MeshState { transmission_error_m: delta, ..Default::default() };
-        if delta > 0.0 {
-            let law = m.drive.evaluate(delta, xi);
+        // Each flank's law is zero until its no-load transmission error (zero for unmodified
+        // flanks, a relief's opening where they are modified), and so is its damper.
+        let drive = m.drive.evaluate(delta, xi);
+        let coast = if drive.force_n > 0.0 { MeshForce::default() } else { m.coast.evaluate(-(delta + m.backlash_m), xi) };
+        if drive.force_n > 0.0 {
+            let law = drive;
             out.elastic_force_n = law.force_n;
             out.force_n = (law.force_n + c * delta_dot).max(0.0);
             out.roll_force_n = law.roll_force_n;
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
-        } else if delta < -m.backlash_m {
+        } else if coast.force_n > 0.0 {
             // The coast law is written for a positive closure −(δ + j); its force pushes back.
-            let law = m.coast.evaluate(-(delta + m.backlash_m), xi);
+            let law = coast;
             out.elastic_force_n = -law.force_n;
             out.force_n = (-law.force_n + c * delta_dot).min(0.0);
             out.roll_force_n = law.roll_force_n;
@@ -280,9 +287,9 @@ impl<'a> LumpedModel<'a> {
         let m = self.mesh;
         let mesh = self.mesh_state(s);
         let xi = m.base_radius_1_m * s.theta_1 + m.roll_offset_m;
-        if mesh.transmission_error_m > 0.0 {
+        if mesh.elastic_force_n > 0.0 {
             nearest(&m.drive, &m.drive_pairs, mesh.elastic_force_n, xi)
-        } else if mesh.transmission_error_m < -m.backlash_m {
+        } else if mesh.elastic_force_n < 0.0 {
             nearest(&m.coast, &m.coast_pairs, -mesh.elastic_force_n, xi)
         } else {
             0

@@ -2,7 +2,9 @@
 //! the mesh deflection δ and the roll position ξ, from a table of static deflections.
 //!
 //! Row i of the table holds, at roll ξᵢ = i·p_b/N, the static deflection δ_k(ξᵢ) under the total
-//! mesh force F_k (k = 0…K, F₀ = 0, δ₀ = 0). Between rows the deflections are interpolated
+//! mesh force F_k (k = 0…K, F₀ = 0); δ₀(ξ) is the no-load transmission error, where the flanks
+//! first touch: zero for unmodified flanks, a relief's opening where they are modified. Below
+//! it the flanks are apart. Between rows the deflections are interpolated
 //! linearly in ξ; along a row F(δ) is piecewise linear. Today the rows come from the analytic
 //! model (`mesh_stiffness::static_deflection_table`); the static FE analyses of the PMOR-Hertz
 //! model give the same kind of table (STE at torque levels).
@@ -92,12 +94,9 @@ impl MeshLaw {
         &self.complementary_energy_j[i * k..(i + 1) * k]
     }
 
-    /// Evaluates the law; zero for δ ≤ 0 (the flanks do not touch). Beyond the last level the
-    /// last segment is extended.
+    /// Evaluates the law; zero for δ ≤ δ₀(ξ) (the flanks do not touch). Beyond the last level
+    /// the last segment is extended.
     pub fn evaluate(&self, delta_m: f64, roll_m: f64) -> MeshForce {
-        if delta_m <= 0.0 {
-            return MeshForce::default();
-        }
         let n = self.rows();
         let dx = self.base_pitch_m / n as f64;
         let pos = roll_m.rem_euclid(self.base_pitch_m) / dx;
@@ -106,6 +105,9 @@ impl MeshLaw {
         let j = (i + 1) % n;
         let (a, b) = (self.row(i), self.row(j));
         let at = |k: usize| (1.0 - t) * a[k] + t * b[k];
+        if delta_m <= at(0) {
+            return MeshForce::default();
+        }
         // Segment m with δ_m(ξ) ≤ δ < δ_{m+1}(ξ): rows increase with k, so bisect.
         let last = self.force_levels_n.len() - 1;
         let (mut lo, mut hi) = (0, last);

@@ -11,6 +11,11 @@
 //! r_b2·θ₂ = ξᵢ − ξ₀ settles it to well below the table's own resolution where the STE is
 //! smooth, and only moves the row across a contact change by δ's change there.
 //!
+//! Row i starts at the no-load transmission error δ₀(ξᵢ) under F₀ = 0: where the rigid flanks
+//! first touch (`PairPlacement::modification_opening_m`): zero for unmodified flanks, and the
+//! reliefs' and crownings' opening where the flanks are modified (issue 27), so that the lumped
+//! model's mesh opens where the statics' contact does.
+//!
 //! The mesh force F is the lumped model's: along the transverse line of action, with the torque
 //! on gear 1 T₁ = r_b1·F. Levels are dense at light load, where Hertz contact is most
 //! nonlinear (`mesh_stiffness::force_levels`' spacing), and stop at the yield force
@@ -18,6 +23,7 @@
 //! level with its last slope, where the FMU already logs the yield warning.
 
 use super::statics::StaticModel;
+use crate::contact::mesh_kinematics::Flank;
 use crate::dynamics::mesh_law::MeshLaw;
 use crate::gear::GearPair;
 use rayon::prelude::*;
@@ -57,6 +63,8 @@ pub fn drive_law_from_statics(
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
     let roll_offset = pair.pitch_point_m() - pair.path_start_m;
     let done = std::sync::atomic::AtomicUsize::new(0);
+    let layers = &model.gears[0].flank.layer_z_m;
+    let z_mid: Vec<f64> = layers.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
     // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass).
     let ste_at = |roll: f64, torque: f64| -> Result<(f64, usize), String> {
         let solve = |delta: f64| {
@@ -76,7 +84,24 @@ pub fn drive_law_from_statics(
         .into_par_iter()
         .map(|i| {
             let roll = pair.base_pitch_m * i as f64 / rows as f64;
+            // Under no load: where the rigid flanks first touch, δ₀(ξ) — zero for unmodified
+            // flanks, the reliefs' and crownings' opening where they are modified.
+            let no_load = || -> Result<f64, String> {
+                let at = |delta: f64| {
+                    let theta2 = ((roll - roll_offset - delta) / rb2).rem_euclid(pitch2);
+                    model.placement.modification_opening_m(Flank::Drive, theta2, &z_mid)
+                };
+                let first = at(0.0).ok_or("no flank within reach")?;
+                at(first).ok_or_else(|| "no flank within reach".to_string())
+            };
             let (mut row, mut pairs) = (vec![0.0], vec![0]);
+            match no_load() {
+                Ok(delta) => row[0] = delta,
+                Err(e) => {
+                    let why = format!("roll {roll:.4e} m, no load: {e}");
+                    return (row, pairs, Some((0, why)));
+                }
+            }
             let mut refused = None;
             for (k, &force) in levels.iter().enumerate().skip(1) {
                 match ste_at(roll, force * rb1) {

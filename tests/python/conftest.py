@@ -85,6 +85,30 @@ def gear_fmus(tmp_path_factory) -> dict[str, GearCase]:
     yield cases
 
 
+RELIEVED_SPEC = "examples/kurokawa_spur_relieved.toml"
+
+
+@pytest.fixture(scope="session")
+def relieved_fmus(tmp_path_factory) -> dict[str, GearCase]:
+    """The spur pair with tip relief and lead crowning (issue 27), both models from one build:
+    ``relieved-pmor`` (PMOR-Hertz) and ``relieved`` (lumped, its mesh law from the same
+    statics, written beside it with ``--lumped-fmu``)."""
+    from fmpy import extract
+
+    out_dir = tmp_path_factory.mktemp("relieved")
+    paths = {"relieved-pmor": ("KurokawaSpurRelievedPmor.fmu", "pmor-hertz"),
+             "relieved": ("KurokawaSpurRelieved.fmu", "lumped")}
+    fmu = {name: REPO_ROOT / "target" / "fmu" / file for name, (file, _) in paths.items()}
+    fmu["relieved"].parent.mkdir(parents=True, exist_ok=True)
+    _fmu_build("build", RELIEVED_SPEC, "-o", str(fmu["relieved-pmor"]), "--model", "pmor-hertz",
+               "--lumped-fmu", str(fmu["relieved"]))
+    cases = {}
+    for name, (_, kind) in paths.items():
+        unzip_dir = Path(extract(str(fmu[name]), unzipdir=out_dir / f"{name}_unzipped"))
+        cases[name] = GearCase(name, REPO_ROOT / RELIEVED_SPEC, fmu[name], Path(), {}, unzip_dir, kind)
+    yield cases
+
+
 @pytest.fixture(params=sorted(GEAR_SPECS))
 def gear_case(request, gear_fmus) -> GearCase:
     """The lumped FMUs (their mesh law is what the mesh-dump tests check)."""
