@@ -177,3 +177,24 @@ fn misalignment_raises_the_face_load_factor_and_lead_crowning_lowers_it() {
     assert!(aligned < ten && ten < twenty, "{aligned} {ten} {twenty}");
     assert!(crowned < twenty, "{crowned} {twenty}");
 }
+
+/// Closed form: the loaded contact ratio estimate (`PairPlacement::loaded_contact_ratio`) of a
+/// linear long relief C_a on both gears over L_r of roll, under a mesh deflection d < C_a: the
+/// relieved ends count where their gap C_a·s (s the share of L_r from its start) is at most d,
+/// so the loaded path is the path less 2·L_r·(1 − d/C_a); unmodified flanks give ε_α. A relief
+/// deep and long enough takes it below 1 (the case `fmu-build` refuses).
+#[test]
+fn the_loaded_contact_ratio_follows_the_relief_in_closed_form() {
+    let plain = pair_with("");
+    let eps = plain.transverse_contact_ratio;
+    let place = PairPlacement::new(&plain);
+    assert!((place.loaded_contact_ratio(10e-6) / eps - 1.0).abs() < 1e-3);
+    let relieved = pair_with(&long_tip_relief(20.0, &plain));
+    let length = (eps - 1.0) * plain.base_pitch_m;
+    for d_um in [5.0, 10.0, 15.0] {
+        let got = PairPlacement::new(&relieved).loaded_contact_ratio(d_um * 1e-6);
+        let expected = eps - 2.0 * length * (1.0 - d_um / 20.0) / plain.base_pitch_m;
+        assert!((got - expected).abs() < 2e-3, "d {d_um} µm: {got} against the closed form {expected}");
+    }
+    assert!(PairPlacement::new(&relieved).loaded_contact_ratio(2e-6) < 1.0);
+}

@@ -419,6 +419,28 @@ fn ste_command(
             stiffness / iso,
             stiffness_mean_of_positions / iso
         );
+        // A modified pair's loaded contact ratio: below 1 the reliefs are deeper than the load
+        // closes over part of the cycle; say so.
+        let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(pair);
+        if place.is_modified() {
+            let at_t: Vec<(f64, f64)> =
+                cases.iter().filter(|c| c.torque_nm == t).map(|c| (c.theta_rad[1], c.ste_m)).collect();
+            let deflection = gearfmu::rom::statics::mean_mesh_deflection_m(&place, layers, &at_t);
+            let ratio = place.loaded_contact_ratio(deflection);
+            println!(
+                "  loaded contact ratio {ratio:.3} (ε_α {:.3}; the path where the profile modifications' gap is within the mean mesh deflection, {:.2} µm){}",
+                pair.transverse_contact_ratio,
+                deflection * 1e6,
+                if ratio < 1.0 {
+                    " — WARNING: below 1, no tooth pair carries the load within its deflection over part of each mesh cycle"
+                } else {
+                    ""
+                }
+            );
+            if ratio < 1.0 {
+                eprintln!("warning: at {} N·m the loaded contact ratio falls to {ratio:.3} (< 1): the reliefs are deeper than the mesh deflects; `fmu-build build` refuses this pair at such a torque", sig(t));
+            }
+        }
         // The face load factor, and ISO 6336-1's from the misalignment (f_sh = 0: the FE gears
         // sit on rigid shafts, clamped at their bores; lead crowning halves F_βx, ISO's B₂ = 0.5).
         // ISO's K_Hβ is the face's load distribution: each section's load per face width averaged
@@ -772,6 +794,17 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
     })
     .map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
+    // The mesh's mean deflection at the operating torque: the table's STE less its no-load row.
+    let force = pair.operating_torque_nm / pair.gear1.base_radius_m;
+    let rows = table.law.rows();
+    let deflection = (0..rows)
+        .map(|i| {
+            let roll = pair.base_pitch_m * i as f64 / rows as f64;
+            table.law.static_deflection(force, roll) - table.law.static_deflection(0.0, roll)
+        })
+        .sum::<f64>()
+        / rows as f64;
+    check_loaded_contact_ratio(pair, deflection, pair.operating_torque_nm)?;
     let kept = &table.law.force_levels_n;
     println!(
         "lumped mesh law from the PMOR-Hertz statics ({} elements across/along/rim): reduction {reduction_s:.1} s, \
@@ -782,6 +815,34 @@ fn lumped_mesh(pair: &GearPair, mesh: &MeshSpec, law: MeshLawChoice, depth_mm: O
         started.elapsed().as_secs_f64() - reduction_s
     );
     Ok(lumped_from_table(pair, table))
+}
+
+/// A modified pair's loaded contact ratio at a torque (`PairPlacement::loaded_contact_ratio`),
+/// printed; below 1 the build is refused: over part of each mesh cycle the load would ride on a
+/// relief deeper than the mesh deflects, a transmission error no model here is validated for.
+fn check_loaded_contact_ratio(pair: &GearPair, deflection_m: f64, torque_nm: f64) -> Result<()> {
+    let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(pair);
+    if !place.is_modified() {
+        return Ok(());
+    }
+    let ratio = place.loaded_contact_ratio(deflection_m);
+    println!(
+        "flank modifications: loaded contact ratio {ratio:.3} at {} N·m (ε_α {:.3}; the path where the profile \
+         modifications' gap is within the mean mesh deflection, {:.2} µm)",
+        sig(torque_nm),
+        pair.transverse_contact_ratio,
+        deflection_m * 1e6
+    );
+    if ratio < 1.0 {
+        anyhow::bail!(
+            "flank modifications: the loaded contact ratio falls to {ratio:.3} (< 1) at {} N·m: the reliefs are deeper \
+             over more of the path than the mesh deflects under that load ({:.2} µm), so over part of each mesh cycle \
+             no tooth pair carries the load within its deflection; shorten or lessen the reliefs",
+            sig(torque_nm),
+            deflection_m * 1e6
+        );
+    }
+    Ok(())
 }
 
 /// The lumped mesh around an FE-fed table; says where the statics ended it, if they did.
@@ -866,6 +927,15 @@ fn build_rom(
     })
     .map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
+    // The statics the shapes were taken from, at the first ROM torque, over a mesh cycle.
+    let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
+    let samples = report.ste_m[0].len() - 1; // the last closes the cycle
+    let cases: Vec<(f64, f64)> =
+        (0..samples).map(|s| (pitch2 * s as f64 / samples as f64, report.ste_m[0][s])).collect();
+    let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(pair);
+    let layers = &model.gears[0].flank(gearfmu::contact::mesh_kinematics::Flank::Drive).grid.layer_z_m;
+    let deflection = gearfmu::rom::statics::mean_mesh_deflection_m(&place, layers, &cases);
+    check_loaded_contact_ratio(pair, deflection, options.rom_torques_nm[0])?;
     // Start times, not durations: the two gears' first stages run side by side.
     let stages = stages.into_inner().unwrap();
     let timings: Vec<String> =

@@ -411,6 +411,31 @@ impl PairPlacement {
         Some(rb1 * (self.first_touch_angle1(flank, theta2, z_m)? - plain.first_touch_angle1(flank, theta2, z_m)?))
     }
 
+    /// The loaded contact ratio of the modified flanks, as a designer estimates it: the length
+    /// of the path of contact over which the profile modifications' gap (both flanks, at
+    /// mid-face, above its smallest value on the path) is at most the mesh's deflection under
+    /// the load, over the base pitch. There a pair can share the load; past it the relief is
+    /// deeper than the load can close. Below 1 no pair carries the load in its own right over
+    /// part of each mesh cycle: the load jumps to whichever pair the deflection reaches first,
+    /// and the STE spikes by the relief's excess (Harris's map beyond its minimum). For
+    /// unmodified flanks it is the transverse contact ratio ε_α. `deflection_m` is the mesh's
+    /// mean deflection under the load, the loaded STE less the no-load TE
+    /// (`rom::statics::mean_mesh_deflection_m`).
+    pub fn loaded_contact_ratio(&self, deflection_m: f64) -> f64 {
+        let p = &self.pair;
+        let (rb1, rb2, loa) = (p.gear1.base_radius_m, p.gear2.base_radius_m, p.loa_length_m());
+        const POINTS: usize = 2000;
+        let du = (p.path_end_m - p.path_start_m) / POINTS as f64;
+        let gap: Vec<f64> = (0..POINTS)
+            .map(|k| {
+                let u = p.path_start_m + (k as f64 + 0.5) * du;
+                self.modification_m([rb1.hypot(u), rb2.hypot(loa - u)], 0.0)
+            })
+            .collect();
+        let least = gap.iter().cloned().fold(f64::INFINITY, f64::min);
+        gap.iter().filter(|&&g| g - least <= deflection_m).count() as f64 * du / p.base_pitch_m
+    }
+
     /// Whether the pair carries any flank modification or misalignment.
     pub fn is_modified(&self) -> bool {
         self.modified

@@ -21,7 +21,7 @@ mod dense;
 use super::flank::Shares;
 use super::reductor::ReducedGear;
 use crate::contact::hertz::ApproachLaw;
-use crate::contact::mesh_kinematics::{ContactKind, PairPlacement, SectionContact};
+use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
 use crate::dynamics::iso6336;
 use crate::gear::{root_stress, GearPair};
 
@@ -408,6 +408,19 @@ impl<'a> StaticModel<'a> {
         }
         Err(format!("the contact search did not settle in {MAX_CONTACT_SEARCHES} searches {}", at()))
     }
+}
+
+/// The mesh's mean deflection under load (m): the loaded STE less the no-load transmission error
+/// δ₀ (where the rigid flanks first touch, `PairPlacement::modification_opening_m`) at the same
+/// gear-2 angles, averaged over the cases `(θ₂, STE)` of a mesh cycle. What a modification's
+/// gap competes with (`PairPlacement::loaded_contact_ratio`).
+pub fn mean_mesh_deflection_m(place: &PairPlacement, layer_z_m: &[f64], cases: &[(f64, f64)]) -> f64 {
+    let z_mid: Vec<f64> = layer_z_m.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+    let deflection: f64 = cases
+        .iter()
+        .map(|&(theta2, ste)| ste - place.modification_opening_m(Flank::Drive, theta2, &z_mid).unwrap_or(0.0))
+        .sum();
+    deflection / cases.len() as f64
 }
 
 /// Which algorithm solves the equilibrium of one contact search.
