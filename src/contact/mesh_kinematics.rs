@@ -347,7 +347,13 @@ impl PairPlacement {
             return [0.0; 2];
         }
         let (g1, g2) = (&self.pair.gear1, &self.pair.gear2);
-        let slope = |g: &Gear, r: f64| if g.modification.is_some() { g.modification.slope_per_roll(g.roll_length_m(r)) } else { 0.0 };
+        let slope = |g: &Gear, r: f64| {
+            if g.modification.is_some() {
+                g.modification.slope_per_roll(g.roll_length_m(r))
+            } else {
+                0.0
+            }
+        };
         [-slope(g1, radius_m[0]) * g1.base_radius_m, slope(g2, radius_m[1]) * g2.base_radius_m]
     }
 

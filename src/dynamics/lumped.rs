@@ -261,7 +261,8 @@ impl<'a> LumpedModel<'a> {
         // Each flank's law is zero until its no-load transmission error (zero for unmodified
         // flanks, a relief's opening where they are modified), and so is its damper.
         let drive = m.drive.evaluate(delta, xi);
-        let coast = if drive.force_n > 0.0 { MeshForce::default() } else { m.coast.evaluate(-(delta + m.backlash_m), xi) };
+        let coast =
+            if drive.force_n > 0.0 { MeshForce::default() } else { m.coast.evaluate(-(delta + m.backlash_m), xi) };
         if drive.force_n > 0.0 {
             let law = drive;
             out.elastic_force_n = law.force_n;

@@ -106,7 +106,14 @@ impl Located {
     /// Only the modifications' axial part (crowning, slope, end relief, misalignment) changes
     /// with z; a deviation is a profile part plus an axial part (`FlankModification::deviation_m`),
     /// so the change is the same for every candidate and the choice among them stands.
-    fn in_section(&self, place: &PairPlacement, flank: Flank, search_section: usize, z: f64, sections: usize) -> Located {
+    fn in_section(
+        &self,
+        place: &PairPlacement,
+        flank: Flank,
+        search_section: usize,
+        z: f64,
+        sections: usize,
+    ) -> Located {
         let mut c = self.c;
         if place.is_modified() {
             c.rigid_penetration_m += place.modification_m(c.radius_m, c.z_m) - place.modification_m(c.radius_m, z);
