@@ -373,8 +373,9 @@ impl PairPlacement {
     /// mid-planes `z_m`, of the pose where that flank drives) with gear 2 at θ₂ and both gears
     /// rigid: the no-load transmission error's pose. The rigid penetration grows with gear 1's
     /// turn into the flank at a rate between the smallest arm ratio and cos β_b (per r_b1·θ₁),
-    /// so a step of −penetration/cos β_b never overshoots and the iteration closes in from the
-    /// open side. `None` if no candidate lies on both active profiles.
+    /// give or take a relief's slope dδ/dρ (10⁻² and less): a step of −penetration/cos β_b
+    /// overshoots by at most that share, and the iteration contracts. `None` if no candidate
+    /// lies on both active profiles.
     pub fn first_touch_angle1(&self, flank: Flank, theta2: f64, z_m: &[f64]) -> Option<f64> {
         let p = &self.pair;
         let (rb1, rb2) = (p.gear1.base_radius_m, p.gear2.base_radius_m);
