@@ -1105,6 +1105,20 @@ fn run_call(
         Call::EnterInit => (fmi2EnterInitializationMode(c), vec![OK], vec![Phase::InitializationMode]),
         Call::ExitInit => {
             let s = fmi2ExitInitializationMode(c);
+            if allowed && s == OK {
+                // Where the master left max_step alone, the PMOR-Hertz FMU lowers its default to
+                // its share of the stability limit with the instance's own parameters (a set
+                // inertia or mesh damping ratio), if that is shorter: never raised, never zero.
+                let mut read = f64::NAN;
+                let status = fmi2GetReal(c, [vr("max_step")].as_ptr(), 1, &mut read);
+                prop_assert_eq!(status, OK);
+                prop_assert!(
+                    read > 0.0 && read <= before.max_step,
+                    "max_step after initialization {read:e}, before {:e}",
+                    before.max_step
+                );
+                m.rec.max_step = read;
+            }
             let (e, p) = ok_or_error(Phase::StepComplete);
             (s, e, p)
         }
@@ -1444,6 +1458,30 @@ fn regression_pmor_outputs_without_contact_do_not_evaluate_it() {
     assert_eq!(fmi2GetReal(c, &force, 1, &mut value), ERR);
     let logs = take_logs(&name);
     assert!(logs.iter().any(|l| l.contains("Hertz")), "{logs:?}");
+    fmi2FreeInstance(c);
+}
+
+/// Found by `fuzz_call_sequences_pmor_hertz` in CI (its call-sequence model expected the
+/// build's max_step after initialization): with a set inertia_1 (939.78 kg·m² at the bore) and
+/// max_step left alone, fmi2ExitInitializationMode lowers the PMOR-Hertz FMU's default max_step
+/// to its share of that instance's stability limit (documented in `exit_initialization`). The
+/// step read back is positive and not above the build's, and doSteps complete.
+#[test]
+fn regression_pmor_max_step_follows_the_instance_parameters_at_initialization() {
+    let r = pmor_resources();
+    let name = unique_name("pmor-inertia");
+    let c = instantiate_from(&name, r);
+    let (inertia, step) = (vr("inertia_1"), vr("max_step"));
+    assert_eq!(fmi2EnterInitializationMode(c), OK);
+    assert_eq!(fmi2SetReal(c, &inertia, 1, &939.7813441446419), OK, "{:?}", take_logs(&name));
+    assert_eq!(fmi2ExitInitializationMode(c), OK, "{:?}", take_logs(&name));
+    let mut value = f64::NAN;
+    assert_eq!(fmi2GetReal(c, &step, 1, &mut value), OK);
+    eprintln!("max_step after initialization {value:e} s (the build's {:e} s)", r.default_max_step_s);
+    assert!(value > 0.0 && value <= r.default_max_step_s, "max_step {value:e}, build's {:e}", r.default_max_step_s);
+    for k in 0..3 {
+        assert_eq!(fmi2DoStep(c, k as f64 * 1e-6, 1e-6, 1), OK, "{:?}", take_logs(&name));
+    }
     fmi2FreeInstance(c);
 }
 
