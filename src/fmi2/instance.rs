@@ -163,8 +163,12 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn exit_initialization(&mut self) -> Status {
-        match self.model.exit_initialization(&mut self.state) {
+        // The model works on a copy, kept only on success: a refusal (a start energy beyond f64)
+        // must not leave half-set values in the state an fmi2GetFMUstate would then capture.
+        let mut next = self.state.clone();
+        match self.model.exit_initialization(&mut next) {
             Ok(()) => {
+                self.state = next;
                 self.phase = Phase::StepComplete;
                 self.log(OK, 2, &format!("initialized at t = {}", self.time));
                 OK
