@@ -73,6 +73,8 @@ def main(argv=None) -> int:
     parser.add_argument("--comm-step", type=float, default=1e-4)
     parser.add_argument("--teeth", type=str, default="21,31", help="z1,z2 for the closed-form speed")
     parser.add_argument("--max-step", type=float, default=None, help="the FMUs' internal step bound (default: theirs)")
+    parser.add_argument("--steady-from", type=float, default=15e-3,
+                        help="start of the steady state for the DTE difference between FMUs (s)")
     parser.add_argument("--png", type=Path, default=None)
     parser.add_argument("--csv", type=Path, default=None)
     args = parser.parse_args(argv)
@@ -94,6 +96,16 @@ def main(argv=None) -> int:
               f"{r['rss_kib'] / 1024:.1f} | {rows[-1, 2]:.4f} | {dte.mean():.3f} | {dte.std():.3f} | {np.ptp(dte):.3f} |")
     if len(results) > 1:
         print(f"wall-time ratio {args.fmus[0].name} / {args.fmus[1].name}: {results[0]['wall_s'] / results[1]['wall_s']:.1f}")
+        # The DTE of each further FMU against the first's, sample by sample (the same
+        # communication grid): over the whole run and in steady state (from --steady-from on).
+        reference = results[0]["rows"]
+        steady = reference[:, 0] >= args.steady_from
+        for f, r in zip(args.fmus[1:], results[1:]):
+            diff = (r["rows"][:, 3] - reference[:, 3]) * 1e6
+            rms_ref = math.sqrt(np.mean((reference[steady, 3] * 1e6) ** 2))
+            print(f"DTE difference {f.name} − {args.fmus[0].name}: RMS {math.sqrt(np.mean(diff ** 2)):.3f} µm over the run, "
+                  f"{math.sqrt(np.mean(diff[steady] ** 2)):.3f} µm from t = {args.steady_from * 1e3:g} ms "
+                  f"(the first's DTE there: RMS {rms_ref:.3f} µm); mean difference there {diff[steady].mean():+.3f} µm")
     if args.csv:
         header = "time_s," + ",".join(f"{f.stem}_w2_rad_s,{f.stem}_dte_m" for f in args.fmus)
         data = np.column_stack([results[0]["rows"][:, 0]] + [c for r in results for c in (r["rows"][:, 2], r["rows"][:, 3])])

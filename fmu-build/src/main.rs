@@ -16,6 +16,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use gearfmu::contact::hertz::ApproachLaw;
 use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
+use gearfmu::dynamics::pmor::model::FlankContact;
 use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh, MeshSpec, ProfileGrading};
 use gearfmu::fe::hex8::Formulation;
@@ -42,6 +43,11 @@ enum ModelChoice {
     PmorHertz,
     /// Rigid gears, potential-energy mesh stiffness, backlash (fast; the reference level).
     Lumped,
+    /// The paper's standard PMOR, the reference PMOR-Hertz is compared with (not for use): the
+    /// same floating-frame model with contact shapes from the standard CMS statics and
+    /// node-to-surface penalty contact (100 × ISO c_γα per node share, the statics' baseline),
+    /// RK4, every coordinate dynamic. Drive flanks only.
+    PmorPenalty,
 }
 
 /// Where the lumped model's mesh law comes from.
@@ -562,7 +568,7 @@ fn ste_with_defaults(spec: &Path, o: SteOptions, resolution: Resolution, out: St
             p_en: o.p_en,
             law: if o.eq20 { ApproachLaw::PaperEq20 } else { ApproachLaw::Weber },
         },
-        StaticMethod::Penalty => Method::Penalty { factor: 100.0 },
+        StaticMethod::Penalty => Method::Penalty { factor: gearfmu::rom::statics::DEFAULT_PENALTY_FACTOR },
     };
     ste_command(&pair, &mesh_spec, &torque_nm, o.angles, o.pitches, method, out)
 }
@@ -650,17 +656,17 @@ fn build(
     if let Some(path) = lumped_fmu {
         check_output_folder(path)?;
     }
-    if matches!(model, ModelChoice::PmorHertz) && mesh_law.is_some() {
+    if !matches!(model, ModelChoice::Lumped) && mesh_law.is_some() {
         anyhow::bail!("--mesh-law chooses the lumped model's mesh law: give it with --model lumped");
     }
-    if matches!(model, ModelChoice::Lumped) && lumped_fmu.is_some() {
+    if !matches!(model, ModelChoice::PmorHertz) && lumped_fmu.is_some() {
         anyhow::bail!("--lumped-fmu writes the lumped FMU beside a PMOR-Hertz build: give it with --model pmor-hertz");
     }
     let mesh_law = mesh_law.unwrap_or(MeshLawChoice::Fe);
     // The FE models' accuracy rests on the mesh: where the spec's [mesh] is silent it takes the
     // mesh measured to meet the DTE's accuracy (as every command does); the analytic law meshes
     // nothing.
-    let meshes = matches!(model, ModelChoice::PmorHertz) || mesh_law == MeshLawChoice::Fe;
+    let meshes = !matches!(model, ModelChoice::Lumped) || mesh_law == MeshLawChoice::Fe;
     let fallback = meshes.then(MeshSpec::dynamic_default);
     let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback, rom.depth_mm)?;
     let modified = gearfmu::contact::mesh_kinematics::PairPlacement::new(&pair).is_modified();
@@ -676,8 +682,13 @@ fn build(
         ModelChoice::Lumped => {
             write_fmu(output, &pair, ModelKind::Lumped(lumped_mesh(&pair, &mesh_spec, mesh_law, rom.depth_mm)?), &so)
         }
+        ModelChoice::PmorPenalty => {
+            let factor = gearfmu::rom::statics::DEFAULT_PENALTY_FACTOR;
+            let (rom_model, _) = build_rom(&pair, &mesh_spec, rom, false, FlankContact::Penalty { factor })?;
+            write_fmu(output, &pair, ModelKind::PmorHertz(Box::new(rom_model)), &so)
+        }
         ModelChoice::PmorHertz => {
-            let (rom_model, lumped) = build_rom(&pair, &mesh_spec, rom, lumped_fmu.is_some())?;
+            let (rom_model, lumped) = build_rom(&pair, &mesh_spec, rom, lumped_fmu.is_some(), FlankContact::Hertz)?;
             write_fmu(output, &pair, ModelKind::PmorHertz(Box::new(rom_model)), &so)?;
             match (lumped_fmu, lumped) {
                 (Some(path), Some(mesh)) => write_fmu(path, &pair, ModelKind::Lumped(mesh), &so),
@@ -720,12 +731,21 @@ fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Resu
                 ("max_step", m.max_step_s),
             ],
             format!(
-                "Gear pair {} (z {}/{}), PMOR-Hertz model: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), Hertz contact",
+                "Gear pair {} (z {}/{}), {}: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), {}",
                 pair.name,
                 pair.gear1.teeth,
                 pair.gear2.teeth,
+                match m.info.contact {
+                    FlankContact::Hertz => "PMOR-Hertz model",
+                    FlankContact::Penalty { .. } => "standard PMOR reference model",
+                },
                 m.gears[0].elastic_size() + 1,
-                m.gears[1].elastic_size() + 1
+                m.gears[1].elastic_size() + 1,
+                match m.info.contact {
+                    FlankContact::Hertz => "Hertz contact".to_string(),
+                    FlankContact::Penalty { factor } =>
+                        format!("node-to-surface penalty contact ({} × ISO 6336-1 c_γα per node), drive flanks only", sig(factor)),
+                }
             ),
         ),
     };
@@ -859,6 +879,7 @@ fn build_rom(
     mesh: &MeshSpec,
     rom: &RomOptions,
     lumped_mesh_law: bool,
+    contact: FlankContact,
 ) -> Result<(gearfmu::dynamics::pmor::model::PmorModel, Option<LumpedMesh>)> {
     use gearfmu::dynamics::pmor::integrator::Integrator;
     use gearfmu::dynamics::pmor::model::Interpolation;
@@ -915,7 +936,15 @@ fn build_rom(
             DynamicsChoice::Full => Condensation::None,
         },
         lumped_mesh_law,
+        contact,
         ..Default::default()
+    };
+    // The reference model: what the paper ran (RK4, every coordinate dynamic).
+    let options = match contact {
+        FlankContact::Hertz => options,
+        FlankContact::Penalty { .. } => {
+            DynamicBuildOptions { integrator: Integrator::Rk4, condensation: Condensation::None, ..options }
+        }
     };
     let started = std::time::Instant::now();
     let bar = spinner("PMOR-Hertz build".into());
@@ -936,6 +965,15 @@ fn build_rom(
     let layers = &model.gears[0].flank(gearfmu::contact::mesh_kinematics::Flank::Drive).grid.layer_z_m;
     let deflection = gearfmu::rom::statics::mean_mesh_deflection_m(&place, layers, &cases);
     check_loaded_contact_ratio(pair, deflection, options.rom_torques_nm[0])?;
+    if let FlankContact::Penalty { factor } = contact {
+        let k = gearfmu::rom::statics::penalty_node_stiffness_n_per_m(pair, layers, 1, factor);
+        println!(
+            "standard PMOR reference: node-to-surface penalty {} × ISO 6336-1 c_γα per node share, both passes: {:.3e} N/mm per interior node and pass ({:.3e} N/mm per node, the paper's Table 9 unit)",
+            sig(factor),
+            k * 1e-3,
+            2.0 * k * 1e-3
+        );
+    }
     // Start times, not durations: the two gears' first stages run side by side.
     let stages = stages.into_inner().unwrap();
     let timings: Vec<String> =

@@ -297,6 +297,22 @@ impl PairPlacement {
         }
     }
 
+    /// The tooth of gear i whose contact flank at axial z is nearest to the own-frame point p
+    /// (the one `distance_from_flank` measures from, whatever tooth it is given), in 0..z.
+    pub fn nearest_flank_tooth(&self, i: usize, z: f64, p: [f64; 2]) -> usize {
+        let gear = self.gear(i);
+        let r = p[0].hypot(p[1]);
+        let phi = p[1].atan2(p[0]);
+        let a = pressure_angle_at(gear, r);
+        let flank_angle = if i == 0 {
+            phi + inv(a) - self.twist[0] * z - self.flank_constant[0]
+        } else {
+            phi - inv(a) - self.twist[1] * z - self.flank_constant[1]
+        };
+        let pitch = 2.0 * PI / gear.teeth as f64;
+        ((flank_angle / pitch).round() as i64).rem_euclid(gear.teeth as i64) as usize
+    }
+
     /// Moment arm about O₁ of the line through world point `w` along gear 2's flank normal there
     /// (for gear 1's tip corner on gear 2's flank).
     pub fn arm_on_gear1_of_gear2_normal(&self, w: [f64; 2], theta2: f64, tooth2: i64, z: f64) -> f64 {

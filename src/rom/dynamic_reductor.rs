@@ -15,7 +15,7 @@
 //! solver, no second reduction.
 
 use super::flank::FlankGrid;
-use super::reductor::{pmor_hertz, Reconstructor, ReducedGear};
+use super::reductor::{pmor_hertz, standard_cms, Reconstructor, ReducedGear};
 use super::sharing;
 use super::statics::{ContactModel, StaticModel};
 use crate::contact::hertz::ApproachLaw;
@@ -23,7 +23,7 @@ use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 use crate::dynamics::pmor::integrator::Integrator;
 pub use crate::dynamics::pmor::linear::IntegratorStep;
 use crate::dynamics::pmor::model::{
-    FlankRows, Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
+    FlankContact, FlankRows, Interpolation, PairInvariants, PmorBuildInfo, PmorGear, PmorModel, SampleInvariants,
 };
 use crate::dynamics::pmor::quasi_static::Condensation;
 use crate::fe::assembly::{self, DofMap};
@@ -52,6 +52,9 @@ pub struct DynamicBuildOptions {
     pub depth_m: f64,
     pub p_en: f64,
     pub law: ApproachLaw,
+    /// The contact law of the statics that make the shapes and of the FMU (PMOR-Hertz by
+    /// default; the penalty one builds the standard PMOR reference on standard CMS gears).
+    pub contact: FlankContact,
     pub interpolation: Interpolation,
     pub modal_damping_ratio: f64,
     pub shape_damping_ratio: f64,
@@ -78,6 +81,7 @@ impl Default for DynamicBuildOptions {
             depth_m: crate::rom::reductor::DEFAULT_CONTACT_DEPTH_M,
             p_en: crate::rom::svd::DEFAULT_P_EN,
             law: ApproachLaw::Weber,
+            contact: FlankContact::Hertz,
             interpolation: Interpolation::CatmullRom,
             modal_damping_ratio: 0.01,
             shape_damping_ratio: 0.05,
@@ -241,9 +245,20 @@ pub fn build_dynamic_model(
         let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
         let factor = model.factorize()?;
         let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
-        progress(format!("gear {}: global attachment modes ({} flank nodes)", i + 1, grid.len()));
-        let (reduced, reconstructor, report) =
-            pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
+        let (reduced, reconstructor, n_sv) = match options.contact {
+            FlankContact::Hertz => {
+                progress(format!("gear {}: global attachment modes ({} flank nodes)", i + 1, grid.len()));
+                let (reduced, reconstructor, report) =
+                    pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
+                (reduced, reconstructor, report.n_sv)
+            }
+            FlankContact::Penalty { .. } => {
+                progress(format!("gear {}: standard CMS attachment modes ({} flank nodes)", i + 1, grid.len()));
+                let n = grid.len();
+                let (reduced, reconstructor) = standard_cms(&model, &factor, grid);
+                (reduced, reconstructor, n)
+            }
+        };
         progress(format!("gear {}: eigenmodes", i + 1));
         let mass = model.mass();
         let probe = options.modes + 6;
@@ -272,7 +287,7 @@ pub fn build_dynamic_model(
             mass_full,
             phi,
             eigenvalues: modes.eigenvalues[..n_k].to_vec(),
-            n_sv: report.n_sv,
+            n_sv,
         })
     };
     let (fe1, fe2) = rayon::join(|| gear_fe(0, &pair.gear1), || gear_fe(1, &pair.gear2));
@@ -281,7 +296,11 @@ pub fn build_dynamic_model(
     // Static analyses over one mesh cycle (and one more sample, one pitch on, for the closure
     // check), for each torque.
     progress(format!("static contact: {} angles × {} torques", options.angles, options.rom_torques_nm.len()));
-    let statics = StaticModel::new(pair, [&fe[0].reduced, &fe[1].reduced], ContactModel::Hertz { law: options.law })?;
+    let contact = match options.contact {
+        FlankContact::Hertz => ContactModel::Hertz { law: options.law },
+        FlankContact::Penalty { factor } => ContactModel::Penalty { factor },
+    };
+    let statics = StaticModel::new(pair, [&fe[0].reduced, &fe[1].reduced], contact)?;
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
     let n_theta = options.angles;
     let jobs: Vec<(usize, usize)> =
@@ -577,6 +596,7 @@ pub fn build_dynamic_model(
         stability_limit_s: 0.0,
         step_checked_torque_nm: 0.0,
         info: PmorBuildInfo {
+            contact: options.contact,
             rom_torques_nm: options.rom_torques_nm.clone(),
             sharing_shapes: options.sharing_shapes,
             depth_m: options.depth_m,

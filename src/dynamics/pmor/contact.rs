@@ -26,7 +26,7 @@
 //! angles.
 
 use super::equations::Stencil;
-use super::model::PmorModel;
+use super::model::{FlankContact, PmorModel};
 use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
 
 /// Angle step of the central differences ∂α/∂θ at tip corners (rad).
@@ -297,6 +297,32 @@ pub fn contact_loads(
     damper_n_s_per_m: f64,
     collect_rows: bool,
 ) -> Result<ContactLoads, String> {
+    if let FlankContact::Penalty { factor } = model.info.contact {
+        return super::penalty::penalty_contact_loads(
+            model,
+            place,
+            poses,
+            restage,
+            factor,
+            damper_n_s_per_m,
+            collect_rows,
+        );
+    }
+    section_contact_loads(model, place, poses, restage, loading, damper_n_s_per_m, collect_rows, &Flank::BOTH)
+}
+
+/// `contact_loads` with the Hertz sections of the given flanks.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn section_contact_loads(
+    model: &PmorModel,
+    place: &PairPlacement,
+    poses: [&GearPose; 2],
+    restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
+    loading: Loading,
+    damper_n_s_per_m: f64,
+    collect_rows: bool,
+    flanks: &[Flank],
+) -> Result<ContactLoads, String> {
     let p = &model.pair;
     let n_e = [poses[0].eta.len(), poses[1].eta.len()];
     let mut out = ContactLoads {
@@ -314,7 +340,7 @@ pub fn contact_loads(
     let theta = [poses[0].theta, poses[1].theta];
     let spur = p.base_helix_angle_rad == 0.0;
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
-    for flank in Flank::BOTH {
+    for &flank in flanks {
         // The flank nodes read at the poses themselves (not the tip corners' differences).
         let mut nodes = [NodeDisplacements::with_capacity(48), NodeDisplacements::with_capacity(48)];
         let searched = place.searched_angles(flank, theta);
@@ -439,28 +465,40 @@ pub fn contact_loads(
         }
     }
     if damped {
-        // The damper reads θ and η_Φ only (the rows' first 1 + n_k entries).
-        let slow = [1 + model.gears[0].modes(), 1 + model.gears[1].modes()];
-        let total_stiffness: f64 = sections_loaded.iter().map(|s| s.stiffness_n_per_m).sum();
-        for section in &sections_loaded {
-            let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
-            let approach_rate: f64 = (0..2)
-                .map(|i| section.rows[i][..slow[i]].iter().zip(poses[i].velocity).map(|(r, v)| r * v).sum::<f64>())
-                .sum();
-            let damper = (c * approach_rate).max(-section.force_n);
-            for i in 0..2 {
-                for (k, r) in section.rows[i][..slow[i]].iter().enumerate() {
-                    out.force[i][k] -= damper * r;
-                    out.damping_force[i][k] += damper * r;
-                }
-            }
-            out.damper_force_n += section.flank_sign * damper;
-            out.damper_power_w += damper * approach_rate;
-        }
+        apply_mesh_damper(model, poses, &sections_loaded, damper_n_s_per_m, &mut out);
     }
     out.normal_force_n += out.damper_force_n;
     if collect_rows {
         out.sections = sections_loaded;
     }
     Ok(out)
+}
+
+/// The mesh damper on the loaded sections (see `contact_loads`): c shared in proportion to each
+/// section's tangent stiffness, on its approach rate from θ̇ and η̇_Φ (the rows' first 1 + n_k
+/// entries), never pulling.
+pub(super) fn apply_mesh_damper(
+    model: &PmorModel,
+    poses: [&GearPose; 2],
+    sections: &[SectionRows],
+    damper_n_s_per_m: f64,
+    out: &mut ContactLoads,
+) {
+    let slow = [1 + model.gears[0].modes(), 1 + model.gears[1].modes()];
+    let total_stiffness: f64 = sections.iter().map(|s| s.stiffness_n_per_m).sum();
+    for section in sections {
+        let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
+        let approach_rate: f64 = (0..2)
+            .map(|i| section.rows[i][..slow[i]].iter().zip(poses[i].velocity).map(|(r, v)| r * v).sum::<f64>())
+            .sum();
+        let damper = (c * approach_rate).max(-section.force_n);
+        for i in 0..2 {
+            for (k, r) in section.rows[i][..slow[i]].iter().enumerate() {
+                out.force[i][k] -= damper * r;
+                out.damping_force[i][k] += damper * r;
+            }
+        }
+        out.damper_force_n += section.flank_sign * damper;
+        out.damper_power_w += damper * approach_rate;
+    }
 }

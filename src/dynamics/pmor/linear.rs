@@ -12,6 +12,7 @@
 //!   every eigenvalue λ of the flow.
 
 use super::integrator::Integrator;
+use super::model::FlankContact;
 use super::{PmorDynamics, PmorState};
 use crate::contact::mesh_kinematics::Flank;
 use nalgebra::{Complex, DMatrix, DVector};
@@ -149,6 +150,18 @@ pub fn static_equilibrium(
         let s = model.initial_state([(rb[1] * theta2 + opening + guess) / rb[0], theta2], [0.0; 2]);
         let y = dynamics.pack(&s);
         match dynamics.rhs(&y, s.anchor, [torque1_nm, torque2_start]) {
+            // Node-to-surface penalty contact (the reference model) on a coarse flank grid can
+            // leave every node clear at a guess the Hertz sections would close: a singular
+            // Jacobian. The guess grows until a node touches (the local deformation that the
+            // CMS shapes carry then takes the load).
+            Ok((_, o))
+                if o.contact.normal_force_n == 0.0
+                    && torque1_nm != 0.0
+                    && matches!(model.info.contact, FlankContact::Penalty { .. })
+                    && guess.abs() < 1e-3 =>
+            {
+                guess = if guess == 0.0 { 1e-6 * torque1_nm.signum() } else { 1.5 * guess }
+            }
             Ok(_) => break (s, y),
             Err(e) if guess.abs() < 1e-3 * te_guess_m.abs() => return Err(e),
             Err(_) => guess *= 0.5,

@@ -7,6 +7,7 @@
 //! - [`equations`]: one gear's Lagrangian terms (mass matrix, quadratic velocity vector, elastic
 //!   and damping forces);
 //! - [`contact`]: the contact search, Hertz law and band on the deformed flanks;
+//! - [`penalty`]: node-to-surface penalty contact instead (the standard PMOR, the reference);
 //! - [`linear`]: static equilibrium, linearization, natural frequencies, the step limit;
 //! - [`integrator`]: RK4 and velocity Verlet, and the stability limit of each;
 //! - [`quasi_static`]: the contact shapes and the hub direction made quasi-static (the
@@ -24,6 +25,7 @@ pub mod integrator;
 pub mod interpolation;
 pub mod linear;
 pub mod model;
+pub mod penalty;
 pub mod quasi_static;
 
 use crate::contact::mesh_kinematics::PairPlacement;

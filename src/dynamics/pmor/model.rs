@@ -235,9 +235,24 @@ impl PmorGear {
     }
 }
 
+/// The contact law between the deformed flanks, offline (the statics that make the contact
+/// shapes) and online alike.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum FlankContact {
+    /// PMOR-Hertz: the Hertz line contact of each axial section, its local deformation left out
+    /// of the basis (the default).
+    Hertz,
+    /// The standard PMOR of the paper (Sects. 4.1, 5.2; `--model pmor-penalty`), the reference
+    /// PMOR-Hertz is compared with: shapes from the standard CMS statics, node-to-surface penalty
+    /// contact, each node's stiffness `factor` × its share of ISO 6336-1's c_γα
+    /// (`rom::statics::penalty_node_stiffness_n_per_m`). Drive flanks only.
+    Penalty { factor: f64 },
+}
+
 /// How the offline build was made (reported, and used by the online contact law).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PmorBuildInfo {
+    pub contact: FlankContact,
     pub rom_torques_nm: Vec<f64>,
     /// Load-sharing shapes per sample and flank (`rom::sharing`).
     pub sharing_shapes: usize,

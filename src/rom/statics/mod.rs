@@ -258,8 +258,6 @@ impl<'a> StaticModel<'a> {
         let place = &self.placement;
         let cos_bb = p.base_helix_angle_rad.cos();
         let layers = &self.gears[0].flank.layer_z_m;
-        let dz = (layers[layers.len() - 1] - layers[0]) / (layers.len() - 1) as f64;
-        let c_gamma = iso6336::to_newton_per_metre(iso6336::mesh_stiffness_c_gamma_alpha(p), 1.0);
         let gears = [&p.gear1, &p.gear2];
         let mut out = Vec::new();
         for j in place.pairs_in_reach() {
@@ -308,7 +306,6 @@ impl<'a> StaticModel<'a> {
                     load[master] = self.gears[master].inward_load_row(&master_shares);
                     load_shares[slave] = slave_shares;
                     load_shares[master] = master_shares;
-                    let share = if layer == 0 || layer == layers.len() - 1 { 0.5 } else { 1.0 };
                     out.push(Element {
                         key: (j, layer, slave, k),
                         result: ElementResult {
@@ -326,7 +323,9 @@ impl<'a> StaticModel<'a> {
                         gap,
                         load,
                         load_shares,
-                        law: Law::Penalty { stiffness_n_per_m: 0.5 * factor * c_gamma * share * dz },
+                        law: Law::Penalty {
+                            stiffness_n_per_m: penalty_node_stiffness_n_per_m(p, layers, layer, factor),
+                        },
                     });
                 }
             }
@@ -408,6 +407,24 @@ impl<'a> StaticModel<'a> {
         }
         Err(format!("the contact search did not settle in {MAX_CONTACT_SEARCHES} searches {}", at()))
     }
+}
+
+/// The penalty baseline's factor on ISO 6336-1's c_γα: the paper's "two orders of magnitude
+/// stiffer than the bodies", so the penalty's own compliance adds about 1 % to the mesh's and the
+/// baseline's STE sits that much above the stiff limit.
+pub const DEFAULT_PENALTY_FACTOR: f64 = 100.0;
+
+/// The penalty stiffness of one flank node in one pass (N/m): `factor` × the ISO 6336-1 mesh
+/// stiffness c_γα times the node's axial share of the face (the end layers stand for half a
+/// spacing), halved because both passes (each gear's nodes against the other's flank) carry the
+/// load. The statics' baseline and the dynamics' reference model (`dynamics::pmor::penalty`)
+/// share it, so the dynamic shapes and the dynamic contact are the same law.
+pub fn penalty_node_stiffness_n_per_m(pair: &GearPair, layer_z_m: &[f64], layer: usize, factor: f64) -> f64 {
+    let n = layer_z_m.len();
+    let dz = (layer_z_m[n - 1] - layer_z_m[0]) / (n - 1) as f64;
+    let c_gamma = iso6336::to_newton_per_metre(iso6336::mesh_stiffness_c_gamma_alpha(pair), 1.0);
+    let share = if layer == 0 || layer == n - 1 { 0.5 } else { 1.0 };
+    0.5 * factor * c_gamma * share * dz
 }
 
 /// The mesh's mean deflection under load (m): the loaded STE less the no-load transmission error
