@@ -667,7 +667,10 @@ fn build(
     // mesh measured to meet the DTE's accuracy (as every command does); the analytic law meshes
     // nothing.
     let meshes = !matches!(model, ModelChoice::Lumped) || mesh_law == MeshLawChoice::Fe;
-    let fallback = meshes.then(MeshSpec::dynamic_default);
+    let fallback = match model {
+        ModelChoice::PmorPenalty => Some(MeshSpec::penalty_reference_default()),
+        _ => meshes.then(MeshSpec::dynamic_default),
+    };
     let (pair, mesh_spec) = pair_and_mesh_or(spec, resolution, fallback, rom.depth_mm)?;
     let modified = gearfmu::contact::mesh_kinematics::PairPlacement::new(&pair).is_modified();
     if modified && matches!(model, ModelChoice::Lumped) && mesh_law == MeshLawChoice::Analytic {
