@@ -88,7 +88,7 @@ def test_example_3_reaches_the_closed_form_speed_and_the_penalty_statics_mean(re
 
 
 def test_coast_flank_contact_is_an_error_with_the_reason(reference_fmu, log_capture):
-    from fmpy.fmi2 import FMICallException
+    from fmpy.fmi1 import FMICallException
 
     name = "reference_reversal"
     md, vr, slave = _slave(reference_fmu, name, callbacks=log_capture.callbacks, logging_on=True)
