@@ -49,6 +49,39 @@ struct NodePenetration {
     master_normal: [f64; 3],
 }
 
+/// Where a rigid slave node sits against the master: its radius in the master's frame, its
+/// signed distance from the nearest master flank (m) and that flank's tooth.
+#[derive(Clone, Copy)]
+struct RigidNode {
+    radius_m: f64,
+    distance_m: f64,
+    tooth: usize,
+}
+
+/// The last node's rigid placement, by its transverse position: on a spur pair the node layers
+/// of one flank row share their (x, y) and the placement does not depend on z (no helix), so a
+/// row's layers are placed once — the trigonometry is most of this contact's cost.
+type RigidMemo = Option<([f64; 2], Option<RigidNode>)>;
+
+/// The rigid placement of a slave node at (x, y) in axial plane z, or `None` where it does not
+/// face the master's active flank.
+fn rigid_node(place: &PairPlacement, slave: usize, x: [f64; 2], z: f64, at: [&Placed; 2]) -> Option<RigidNode> {
+    let pair = &place.pair;
+    let master = 1 - slave;
+    let w = place.to_world(slave, at[slave].reduced_angle, x);
+    let own = place.to_own(master, at[master].reduced_angle, w);
+    let r = own[0].hypot(own[1]);
+    let g = if master == 0 { &pair.gear1 } else { &pair.gear2 };
+    if !(g.form_radius_m.max(g.base_radius_m)..=g.tip_radius_m).contains(&r) {
+        return None;
+    }
+    Some(RigidNode {
+        radius_m: r,
+        distance_m: place.distance_from_flank(master, 0, z, own),
+        tooth: place.nearest_flank_tooth(master, z, own),
+    })
+}
+
 /// The penetration of slave gear `slave`'s flank node k (in its drive flank rows) into the other
 /// gear's flank; `None` where the node does not face the master's active flank. `reach_m`: the
 /// most the deformation can close (a rigid gap beyond it is skipped before the elastic part).
@@ -59,6 +92,7 @@ fn node_penetration(
     k: usize,
     at: [&Placed; 2],
     reach_m: f64,
+    memo: &mut RigidMemo,
 ) -> Result<Option<NodePenetration>, String> {
     let pair = &model.pair;
     let master = 1 - slave;
@@ -68,21 +102,22 @@ fn node_penetration(
     let layer = k % layers.len();
     let z = layers[layer];
     let x = grid.node_xy[k];
-    let w = place.to_world(slave, at[slave].reduced_angle, x);
-    let own = place.to_own(master, at[master].reduced_angle, w);
-    let r = own[0].hypot(own[1]);
-    let g = if master == 0 { &pair.gear1 } else { &pair.gear2 };
-    if !(g.form_radius_m.max(g.base_radius_m)..=g.tip_radius_m).contains(&r) {
-        return Ok(None);
-    }
+    let rigid = match memo {
+        Some((last, rigid)) if *last == x && pair.base_helix_angle_rad == 0.0 => *rigid,
+        _ => {
+            let rigid = rigid_node(place, slave, x, z, at);
+            *memo = Some((x, rigid));
+            rigid
+        }
+    };
+    let Some(RigidNode { radius_m: r, distance_m, tooth }) = rigid else { return Ok(None) };
     let slave_radius = x[0].hypot(x[1]);
     let radii = if slave == 0 { [slave_radius, r] } else { [r, slave_radius] };
     let cos_bb = pair.base_helix_angle_rad.cos();
-    let alpha0 = -cos_bb * place.distance_from_flank(master, 0, z, own) - place.modification_m(radii, z);
+    let alpha0 = -cos_bb * distance_m - place.modification_m(radii, z);
     if alpha0 + reach_m <= 0.0 {
         return Ok(None);
     }
-    let tooth = place.nearest_flank_tooth(master, z, own);
     let Some(master_shares) = rows[master].grid.layer_shares(tooth, r, layer) else {
         return Err(format!(
             "gear {}'s flank node {k} meets tooth {tooth} of gear {}, which has no stored flank rows",
@@ -187,8 +222,10 @@ pub fn penalty_contact_loads(
         let grid = &model.gears[slave].flank(Flank::Drive).grid;
         let per_tooth = grid.row_radius_m.len() * layers.len();
         for slot in teeth_near_mesh(model, place, slave, [&placed[0], &placed[1]]) {
+            let mut memo: RigidMemo = None;
             for k in slot * per_tooth..(slot + 1) * per_tooth {
-                let Some(hit) = node_penetration(model, place, slave, k, [&placed[0], &placed[1]], reach)? else {
+                let at = [&placed[0], &placed[1]];
+                let Some(hit) = node_penetration(model, place, slave, k, at, reach, &mut memo)? else {
                     continue;
                 };
                 if hit.alpha_m <= 0.0 {
@@ -204,7 +241,8 @@ pub fn penalty_contact_loads(
                         let at = if i == 0 { [&shifted[d], &placed[1]] } else { [&placed[0], &shifted[2 + d]] };
                         // Moved off the master's flank within 1e-7 rad: the contact's edge; the
                         // one-sided value stands in as no penetration.
-                        *v = node_penetration(model, place, slave, k, at, f64::INFINITY)?.map_or(0.0, |p| p.alpha_m);
+                        *v = node_penetration(model, place, slave, k, at, f64::INFINITY, &mut None)?
+                            .map_or(0.0, |p| p.alpha_m);
                     }
                     alpha_slope[i] = (value[0] - value[1]) / (2.0 * ANGLE_STEP);
                 }
