@@ -222,7 +222,9 @@ pub fn penalty_contact_loads(
         let grid = &model.gears[slave].flank(Flank::Drive).grid;
         let per_tooth = grid.row_radius_m.len() * layers.len();
         for slot in teeth_near_mesh(model, place, slave, [&placed[0], &placed[1]]) {
+            // One memo for the pose and one for each of the differences' four.
             let mut memo: RigidMemo = None;
+            let mut shifted_memo: [RigidMemo; 4] = [None; 4];
             for k in slot * per_tooth..(slot + 1) * per_tooth {
                 let at = [&placed[0], &placed[1]];
                 let Some(hit) = node_penetration(model, place, slave, k, at, reach, &mut memo)? else {
@@ -241,7 +243,8 @@ pub fn penalty_contact_loads(
                         let at = if i == 0 { [&shifted[d], &placed[1]] } else { [&placed[0], &shifted[2 + d]] };
                         // Moved off the master's flank within 1e-7 rad: the contact's edge; the
                         // one-sided value stands in as no penetration.
-                        *v = node_penetration(model, place, slave, k, at, f64::INFINITY, &mut None)?
+                        let memo = &mut shifted_memo[2 * i + d];
+                        *v = node_penetration(model, place, slave, k, at, f64::INFINITY, memo)?
                             .map_or(0.0, |p| p.alpha_m);
                     }
                     alpha_slope[i] = (value[0] - value[1]) / (2.0 * ANGLE_STEP);
