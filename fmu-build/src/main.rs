@@ -86,21 +86,23 @@ struct RomOptions {
     #[arg(long, allow_negative_numbers = true, value_parser = positive_number)]
     depth_mm: Option<f64>,
     /// Share of the deformation energy the SVD of the attachment modes keeps, in (0, 1] (default:
-    /// chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`).
-    #[arg(long, default_value_t = gearfmu::rom::svd::DEFAULT_P_EN, allow_negative_numbers = true, value_parser = energy_share)]
-    p_en: f64,
+    /// chosen by measured accuracy, `rom::svd::DEFAULT_P_EN`, 0.999999).
+    #[arg(long, allow_negative_numbers = true, value_parser = energy_share)]
+    p_en: Option<f64>,
     /// Interpolation of the shapes in the gear angle.
     #[arg(long, value_enum, default_value = "catmull-rom")]
     interpolation: InterpolationChoice,
     /// The FMU's time integrator (its default max_step is 0.6 of this one's stability limit).
-    #[arg(long, value_enum, default_value = "verlet")]
-    integrator: IntegratorChoice,
+    /// Default: verlet.
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorChoice>,
     /// Which coordinates carry inertia: the contact shapes and the hub direction quasi-static
     /// (the default: the step set by the body modes and the mesh, 7.3 µs instead of 1.7 µs on
     /// the example pair, example 3's DTE within 0.02 %), or all of them (the paper's model, a
-    /// reference; its step is bounded by the shapes against the contact, ≈ 100 kHz).
-    #[arg(long, value_enum, default_value = "quasi-static")]
-    dynamics: DynamicsChoice,
+    /// reference; its step is bounded by the shapes against the contact, ≈ 100 kHz). Default:
+    /// quasi-static.
+    #[arg(long, value_enum)]
+    dynamics: Option<DynamicsChoice>,
 }
 
 /// A count in [LO, HI] (a value outside is refused with the range, before any work).
@@ -659,6 +661,25 @@ fn build(
     if !matches!(model, ModelChoice::Lumped) && mesh_law.is_some() {
         anyhow::bail!("--mesh-law chooses the lumped model's mesh law: give it with --model lumped");
     }
+    if matches!(model, ModelChoice::PmorPenalty) {
+        // The reference is the paper's model: its gears keep their local deformation (no depth,
+        // no SVD) and it is RK4 on every coordinate. An option it would ignore is refused.
+        let ignored: Vec<&str> = [
+            ("--integrator", rom.integrator.is_some()),
+            ("--dynamics", rom.dynamics.is_some()),
+            ("--depth-mm", rom.depth_mm.is_some()),
+            ("--p-en", rom.p_en.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(name, given)| given.then_some(name))
+        .collect();
+        if !ignored.is_empty() {
+            anyhow::bail!(
+                "{} do not apply to --model pmor-penalty: the standard PMOR reference keeps each gear's local deformation (standard CMS: no contact depth, no SVD) and integrates every coordinate by RK4, as the paper ran it",
+                ignored.join(", ")
+            );
+        }
+    }
     if !matches!(model, ModelChoice::PmorHertz) && lumped_fmu.is_some() {
         anyhow::bail!("--lumped-fmu writes the lumped FMU beside a PMOR-Hertz build: give it with --model pmor-hertz");
     }
@@ -925,16 +946,16 @@ fn build_rom(
         rom_torques_nm,
         sharing_shapes: rom.sharing_shapes,
         depth_m,
-        p_en: rom.p_en,
+        p_en: rom.p_en.unwrap_or(gearfmu::rom::svd::DEFAULT_P_EN),
         interpolation: match rom.interpolation {
             InterpolationChoice::CatmullRom => Interpolation::CatmullRom,
             InterpolationChoice::Linear => Interpolation::Linear,
         },
-        integrator: match rom.integrator {
+        integrator: match rom.integrator.unwrap_or(IntegratorChoice::Verlet) {
             IntegratorChoice::Verlet => Integrator::Verlet,
             IntegratorChoice::Rk4 => Integrator::Rk4,
         },
-        condensation: match rom.dynamics {
+        condensation: match rom.dynamics.unwrap_or(DynamicsChoice::QuasiStatic) {
             DynamicsChoice::QuasiStatic => Condensation::QuasiStatic,
             DynamicsChoice::Full => Condensation::None,
         },

@@ -66,6 +66,23 @@ fn p_en_above_one_is_refused_naming_the_option_and_its_range() {
     refused(&["ste", EXAMPLE, "--p-en", "0"], &["--p-en", "(0, 1]"]);
 }
 
+/// The standard PMOR reference is the paper's model (standard CMS gears, RK4 on every
+/// coordinate): an option it would ignore is refused, naming it, before any work.
+#[test]
+fn options_the_reference_model_would_ignore_are_refused_naming_them() {
+    let dir = scratch("penalty-options");
+    let out = dir.join("reference.fmu");
+    let out = out.to_str().unwrap();
+    let text = refused(
+        &["build", EXAMPLE, "-o", out, "--model", "pmor-penalty", "--integrator", "verlet", "--depth-mm", "2"],
+        &["--integrator", "--depth-mm", "do not apply to --model pmor-penalty"],
+    );
+    assert!(!text.contains("--dynamics") && !text.contains("--p-en,"), "{text}");
+    refused(&["build", EXAMPLE, "-o", out, "--model", "pmor-penalty", "--dynamics", "full"], &["--dynamics"]);
+    refused(&["build", EXAMPLE, "-o", out, "--model", "pmor-penalty", "--p-en", "0.99"], &["--p-en"]);
+    assert!(!std::path::Path::new(out).exists(), "nothing is written");
+}
+
 #[test]
 fn zero_modes_are_refused_naming_the_option_and_its_range() {
     refused(&["build", EXAMPLE, "-o", "x.fmu", "--modes", "0"], &["--modes", "1..=200"]);
