@@ -214,6 +214,9 @@ pub fn penalty_contact_loads(
     let damped = damper_n_s_per_m > 0.0;
     let collect = damped || collect_rows;
     let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
+    // The node stiffness depends on the layer only: once per call, not per loaded node.
+    let layer_stiffness: Vec<f64> =
+        (0..layers.len()).map(|l| penalty_node_stiffness_n_per_m(&model.pair, layers, l, factor)).collect();
     let mut sections: Vec<SectionRows> = Vec::new();
     let mut pair_forces: Vec<(i64, f64)> = Vec::new();
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
@@ -233,7 +236,7 @@ pub fn penalty_contact_loads(
                 if hit.alpha_m <= 0.0 {
                     continue;
                 }
-                let stiffness = penalty_node_stiffness_n_per_m(&model.pair, layers, k % layers.len(), factor);
+                let stiffness = layer_stiffness[k % layers.len()];
                 let force = stiffness * hit.alpha_m;
                 // ∂α/∂θᵢ at fixed η: central differences of the same node's penetration.
                 let mut alpha_slope = [0.0; 2];
