@@ -92,8 +92,9 @@ struct RomOptions {
     /// Interpolation of the shapes in the gear angle.
     #[arg(long, value_enum, default_value = "catmull-rom")]
     interpolation: InterpolationChoice,
-    /// The FMU's time integrator (its default max_step is 0.6 of this one's stability limit).
-    /// Default: verlet.
+    /// The FMU's time integrator (its default max_step is 0.6 of this one's stability limit;
+    /// the discrete gradient, unconditionally stable, takes velocity Verlet's). Default:
+    /// discrete-gradient, verlet with `--dynamics full`.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorChoice>,
     /// Which coordinates carry inertia: the contact shapes and the hub direction quasi-static
@@ -157,6 +158,9 @@ enum IntegratorChoice {
     /// The paper's classical Runge–Kutta: four right-hand sides per step, fourth order, stable
     /// to ωh = 2√2.
     Rk4,
+    /// Energy-conserving discrete gradient (Gonzalez) on the trapezoid: implicit, two to three
+    /// quasi-static solves per step, unconditionally stable; the quasi-static dynamics only.
+    DiscreteGradient,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -940,6 +944,13 @@ fn build_rom(
         sig(depth_m * 1e3),
         sig(gearfmu::dynamics::pmor::linear::step_load_ceiling_of(pair, &rom_torques_nm))
     );
+    if matches!(rom.integrator, Some(IntegratorChoice::DiscreteGradient))
+        && matches!(rom.dynamics, Some(DynamicsChoice::Full))
+    {
+        anyhow::bail!(
+            "--integrator discrete-gradient needs --dynamics quasi-static: its step is implicit in the slow coordinates only, whose mass is constant"
+        );
+    }
     let options = DynamicBuildOptions {
         modes: rom.modes,
         angles: rom.angles,
@@ -951,9 +962,15 @@ fn build_rom(
             InterpolationChoice::CatmullRom => Interpolation::CatmullRom,
             InterpolationChoice::Linear => Interpolation::Linear,
         },
-        integrator: match rom.integrator.unwrap_or(IntegratorChoice::Verlet) {
+        // The energy-conserving step where the dynamics are quasi-static (the default), velocity
+        // Verlet on the full pair (the discrete gradient needs the constant slow mass).
+        integrator: match rom.integrator.unwrap_or(match rom.dynamics {
+            Some(DynamicsChoice::Full) => IntegratorChoice::Verlet,
+            _ => IntegratorChoice::DiscreteGradient,
+        }) {
             IntegratorChoice::Verlet => Integrator::Verlet,
             IntegratorChoice::Rk4 => Integrator::Rk4,
+            IntegratorChoice::DiscreteGradient => Integrator::DiscreteGradient,
         },
         condensation: match rom.dynamics.unwrap_or(DynamicsChoice::QuasiStatic) {
             DynamicsChoice::QuasiStatic => Condensation::QuasiStatic,
@@ -1023,14 +1040,20 @@ fn build_rom(
         );
     }
     let f = &report.step.natural_frequencies_hz;
+    let step_rule = match report.step.integrator {
+        gearfmu::dynamics::pmor::integrator::Integrator::DiscreteGradient => {
+            "discrete gradient (unconditionally stable; its step is 0.6 of velocity Verlet's limit)"
+        }
+        other => other.name(),
+    };
     println!(
-        "linearized at {:.0} N·m: lowest natural frequencies {:.0}, {:.0}, {:.0} … highest {:.0} Hz; {} stable to {:.2} µs, default max_step {:.1} µs",
+        "linearized at {:.0} N·m: lowest natural frequencies {:.0}, {:.0}, {:.0} … highest {:.0} Hz; {} limit {:.2} µs, default max_step {:.1} µs",
         report.step.torque_nm,
         f[1],
         f[2],
         f[3],
         f[f.len() - 1],
-        report.step.integrator.name(),
+        step_rule,
         report.step.stability_limit_s * 1e6,
         report.step.max_step_s * 1e6
     );

@@ -455,7 +455,8 @@ impl LinearizedPair {
     /// of the flow (its one-step map is a polynomial in hJ, so that is exact); velocity Verlet
     /// on its own one-step map of the whole flow (`verlet_stability_limit_s`).
     pub fn stability_limit_s(&self, integrator: Integrator) -> f64 {
-        if integrator == Integrator::Verlet {
+        // The discrete gradient is unconditionally stable; its step rule is Verlet's limit.
+        if integrator == Integrator::Verlet || integrator == Integrator::DiscreteGradient {
             return self.verlet_stability_limit_s();
         }
         // The rigid rotation's near-zero eigenvalues never limit the step; the differences leave

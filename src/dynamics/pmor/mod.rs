@@ -528,6 +528,7 @@ impl<'a> PmorDynamics<'a> {
         let result = self.settle(s, torques).and_then(|first| match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
             Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first),
+            Integrator::DiscreteGradient => self.discrete_gradient_advance(s, torques, duration, max_step).map(|_| ()),
         });
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(false);

@@ -223,6 +223,24 @@ impl GearSplit {
         self.fast_columns[c].iter().map(|&(j, f)| f * v[j]).sum()
     }
 
+    /// The slow body coordinates' condensed stiffness, mass-normalized: (Qᵀ(M_ΦΦ − bbᵀ/J)Q)⁻¹
+    /// times QᵀΛQ − QᵀΛF(FᵀΛF)⁻¹FᵀΛQ (the fast body coordinates at their equilibrium; the
+    /// contact and the torque left out). The discrete-gradient step's Newton matrix is made of
+    /// it: exact for the bodies, which are linear.
+    pub fn slow_body_stiffness(&self, eigenvalues: &[f64]) -> DMatrix<f64> {
+        let lambda = DMatrix::from_diagonal(&DVector::from_column_slice(eigenvalues));
+        let (q, f) = (&self.basis, &self.fast_basis);
+        let mut k = q.transpose() * &lambda * q;
+        if f.ncols() > 0 {
+            let kqf = q.transpose() * &lambda * f;
+            let kff = f.transpose() * &lambda * f;
+            if let Some(inverse) = kff.try_inverse() {
+                k -= &kqf * inverse * kqf.transpose();
+            }
+        }
+        self.xi_mass_factor.solve(&k)
+    }
+
     /// η += Q·ξ (n_k).
     fn add_slow(&self, xi: &[f64], eta: &mut [f64]) {
         for (column, &x) in self.slow_columns.iter().zip(xi) {
@@ -293,6 +311,8 @@ pub struct QuasiStatic {
     /// Whether a time stepper is calling (`STEP_RELATIVE_DECREMENT`), else every solve is
     /// tight (the linearization's differences need that).
     pub(super) stepping: std::cell::Cell<bool>,
+    /// (h, (I + h²/4·A)⁻¹): the discrete-gradient iteration's matrix at the step it was made for.
+    pub(super) iteration_matrix: RefCell<Option<(f64, DMatrix<f64>)>>,
 }
 
 impl QuasiStatic {
@@ -323,6 +343,7 @@ impl QuasiStatic {
             prediction: RefCell::new(None),
             counts: Default::default(),
             stepping: Default::default(),
+            iteration_matrix: RefCell::new(None),
         }
     }
 }
@@ -814,6 +835,20 @@ impl<'a> PmorDynamics<'a> {
         let n = y.len();
         dy[n - 1] = e.dissipation_w;
         Ok((dy, e.outputs))
+    }
+
+    /// M·x for the slow coordinates' constant mass (J on φ, Qᵀ(M_ΦΦ − bbᵀ/J)Q on ξ, per gear).
+    pub(super) fn slow_mass_times(&self, qs: &QuasiStatic, x: &[f64], out: &mut [f64]) {
+        let l = self.layout();
+        for i in 0..2 {
+            let sp = &qs.splits[i];
+            let q = l.q(i);
+            let n = l.n_q[i];
+            out[q] = sp.inertia_kgm2 * x[q];
+            for a in 1..n {
+                out[q + a] = (1..n).map(|b| sp.xi_mass[(a - 1, b - 1)] * x[q + b]).sum();
+            }
+        }
     }
 
     /// The outputs at a state as it stands (its fast coordinates not re-solved).
