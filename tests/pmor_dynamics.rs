@@ -1279,7 +1279,7 @@ fn undamped_relieved_pair_conserves_energy_over_ten_mesh_cycles() {
 /// run as the FMU runs it (`advance`), over ten pitches of gear 2 with tooth pairs entering and
 /// leaving: the largest |E − E₀| ≤ 1e-3 of the peak vibration energy. Velocity Verlet at the
 /// same step, beside it, loses 2e-2 (its shadow energy jumps at each contact event): the test
-/// would fail on it. Measured: 1.2e-4 (DG) against 2.3e-2 (Verlet).
+/// would fail on it. Measured: 1.0e-5 (DG) against 2.3e-2 (Verlet).
 #[test]
 fn the_shipped_discrete_gradient_keeps_the_undamped_energy_within_1e_3_of_the_vibration_energy() {
     use gearfmu::dynamics::pmor::contact::Loading;

@@ -390,9 +390,16 @@ impl GearPairFmu {
                 "RK4",
                 "the stiffest mesh mode",
             ),
+            // The discrete gradient is unconditionally stable; its step rule is velocity
+            // Verlet's limit (the accuracy its DTE was measured at), checked as Verlet's.
             Physics::PmorHertz { model, place } => (
                 self.pmor_stability_limit(model, place, s)?,
-                model.integrator.name(),
+                match model.integrator {
+                    crate::dynamics::pmor::integrator::Integrator::DiscreteGradient => {
+                        "the discrete gradient's step rule, velocity Verlet"
+                    }
+                    other => other.name(),
+                },
                 "the pair linearized at 4 × its ROM torque",
             ),
         };

@@ -528,6 +528,11 @@ impl<'a> PmorDynamics<'a> {
         let result = self.settle(s, torques).and_then(|first| match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
             Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first),
+            // The discrete gradient needs the condensation's constant slow mass; the full pair
+            // (`Condensation::None`, with its θ-dependent mass) steps with Verlet, its step rule.
+            Integrator::DiscreteGradient if self.quasi_static.is_none() => {
+                self.verlet_advance_from(s, torques, duration, max_step, first)
+            }
             Integrator::DiscreteGradient => self.discrete_gradient_advance(s, torques, duration, max_step).map(|_| ()),
         });
         if let Some(qs) = &self.quasi_static {
