@@ -212,11 +212,27 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
     ) -> Result<usize, String> {
+        self.discrete_gradient_advance_from(s, torques, duration, max_step, None)
+    }
+
+    /// `discrete_gradient_advance` from the right-hand side at `s` where the caller has it
+    /// already (the settling to new torques evaluates it).
+    pub(super) fn discrete_gradient_advance_from(
+        &self,
+        s: &mut PmorState,
+        torques: [f64; 2],
+        duration: f64,
+        max_step: f64,
+        first: Option<(Vec<f64>, super::PmorOutputs)>,
+    ) -> Result<usize, String> {
         let qs = self.condensed().ok_or("the discrete-gradient step needs the quasi-static condensation")?;
         let (n, h) = super::substeps(duration, max_step);
         let solves_before = qs.counts.get().1;
         let mut y = self.pack(s);
-        let (dy, outputs) = self.rhs(&y, s.anchor, torques)?;
+        let (dy, outputs) = match first {
+            Some(f) => f,
+            None => self.rhs(&y, s.anchor, torques)?,
+        };
         let mut start = StepStart { dy, outputs, previous_acceleration: None };
         for _ in 0..n {
             self.discrete_gradient_step(qs, &mut y, &mut start, s.anchor, torques, h, 0)?;

@@ -533,7 +533,9 @@ impl<'a> PmorDynamics<'a> {
             Integrator::DiscreteGradient if self.quasi_static.is_none() => {
                 self.verlet_advance_from(s, torques, duration, max_step, first)
             }
-            Integrator::DiscreteGradient => self.discrete_gradient_advance(s, torques, duration, max_step).map(|_| ()),
+            Integrator::DiscreteGradient => {
+                self.discrete_gradient_advance_from(s, torques, duration, max_step, first).map(|_| ())
+            }
         });
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(false);
