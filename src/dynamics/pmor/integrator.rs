@@ -48,10 +48,9 @@ impl Integrator {
             Integrator::Rk4 => crate::dynamics::rk4_stability::rk4_is_stable(lambda, h),
             // Past the limit |μ| leaves 1 like √(h − h_limit), so a tolerance above the
             // eigenvalues' round-off near a double root (√ε) moves the limit by ~ε only.
-            Integrator::Verlet => verlet_spectral_radius(lambda, h) <= 1.0 + 1e-7,
-            // The trapezoid's amplification (1 + z/2)/(1 − z/2) is within the unit circle
-            // wherever Re z ≤ 0, and its step rule is Verlet's: judged as Verlet.
-            Integrator::DiscreteGradient => verlet_spectral_radius(lambda, h) <= 1.0 + 1e-7,
+            // The discrete gradient's trapezoid, (1 + z/2)/(1 − z/2), is within the unit circle
+            // wherever Re z ≤ 0; its step rule is Verlet's, so it is judged as Verlet.
+            Integrator::Verlet | Integrator::DiscreteGradient => verlet_spectral_radius(lambda, h) <= 1.0 + 1e-7,
         }
     }
 
