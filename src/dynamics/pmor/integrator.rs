@@ -234,35 +234,52 @@ impl<'a> PmorDynamics<'a> {
         };
         let mut start = StepStart { dy, outputs, previous_acceleration: None };
         for _ in 0..n {
-            self.discrete_gradient_step(qs, &mut y, &mut start, s.anchor, torques, h, 0)?;
-            self.unpack(&y, s);
-            let anchor = s.anchor;
-            self.reanchor(s);
-            if s.anchor != anchor {
-                y = self.pack(s);
-                let before = start.outputs.bore_theta;
-                let (dy, outputs) = self.rhs(&y, s.anchor, torques)?;
-                let len = y.len();
-                y[len - 2] +=
-                    torques[0] * (outputs.bore_theta[0] - before[0]) + torques[1] * (outputs.bore_theta[1] - before[1]);
-                start = StepStart { dy, outputs, previous_acceleration: start.previous_acceleration.take() };
-            }
+            self.discrete_gradient_step(qs, s, &mut y, &mut start, torques, h, 0)?;
+            self.end_discrete_gradient_step(s, &mut y, &mut start, torques)?;
         }
         Ok(qs.counts.get().1 - solves_before)
     }
 
-    /// One step of length h from (y, start), or two of h/2 where Newton does not converge.
+    /// After an accepted step: the state at y, each anchor moved to the pitch that holds its
+    /// angle and, where one moved, the step's start evaluated again in the new pitch (a
+    /// condensed pair's new solve may move the bore by a Newton step: its work is booked).
+    fn end_discrete_gradient_step(
+        &self,
+        s: &mut PmorState,
+        y: &mut Vec<f64>,
+        start: &mut StepStart,
+        torques: [f64; 2],
+    ) -> Result<(), String> {
+        self.unpack(y, s);
+        let anchor = s.anchor;
+        self.reanchor(s);
+        if s.anchor != anchor {
+            *y = self.pack(s);
+            let before = start.outputs.bore_theta;
+            let (dy, outputs) = self.rhs(y, s.anchor, torques)?;
+            let len = y.len();
+            y[len - 2] +=
+                torques[0] * (outputs.bore_theta[0] - before[0]) + torques[1] * (outputs.bore_theta[1] - before[1]);
+            *start = StepStart { dy, outputs, previous_acceleration: start.previous_acceleration.take() };
+        }
+        Ok(())
+    }
+
+    /// One step of length h from (y, start), or two of h/2 where Newton does not converge (the
+    /// anchors moved between them as between any two steps: the halves of a step that crosses
+    /// a pitch end must each stay within the stored samples).
     #[allow(clippy::too_many_arguments)]
     fn discrete_gradient_step(
         &self,
         qs: &super::quasi_static::QuasiStatic,
+        s: &mut PmorState,
         y: &mut Vec<f64>,
         start: &mut StepStart,
-        anchor: [i64; 2],
         torques: [f64; 2],
         h: f64,
         halvings: usize,
     ) -> Result<(), String> {
+        let anchor = s.anchor;
         let l = self.layout();
         let n_q = l.n_q[0] + l.n_q[1];
         let len = y.len();
@@ -330,8 +347,9 @@ impl<'a> PmorDynamics<'a> {
             // The quasi-static solver restarts from the step's start, then two half steps.
             let y0 = y.clone();
             let _ = self.rhs(&y0, anchor, torques)?;
-            self.discrete_gradient_step(qs, y, start, anchor, torques, 0.5 * h, halvings + 1)?;
-            return self.discrete_gradient_step(qs, y, start, anchor, torques, 0.5 * h, halvings + 1);
+            self.discrete_gradient_step(qs, s, y, start, torques, 0.5 * h, halvings + 1)?;
+            self.end_discrete_gradient_step(s, y, start, torques)?;
+            return self.discrete_gradient_step(qs, s, y, start, torques, 0.5 * h, halvings + 1);
         };
         // The accepted state is the last one evaluated (its potential is the one booked), with
         // the velocity of the last update.

@@ -518,8 +518,35 @@ impl<'a> PmorDynamics<'a> {
         }
     }
 
-    /// Advances by `duration` in steps of `self.integrator` no longer than `max_step`.
+    /// The longest step the gears' speeds allow (s): each gear turns by at most 1/
+    /// `STEPS_PER_SAMPLE_INTERVAL` of its angular sample interval Δϑ = pitch/n_θ per step.
+    ///
+    /// Why: the shapes are stored over ϑ ∈ [−Δϑ, pitch + Δϑ) of the anchored pitch, and the anchor
+    /// moves between steps, not within one; a step whose travel exceeds Δϑ can leave the stored
+    /// samples (issue 38: at a 2.9 kHz mesh frequency gear 2 of the Kurokawa pair turns 0.0118
+    /// rad in 20 µs against Δϑ = 0.0101 rad). It is also the physics' rule: n_θ samples per mesh
+    /// period are what the model knows of the mesh's variation, and a step that skips samples
+    /// steps over the stiffness changes and contact onsets they resolve. With two steps per
+    /// sample the travel of a step, its Newton iterates and a speed change within the call stay
+    /// inside the stored range with a half-interval to spare.
+    pub fn angular_step_bound_s(&self, s: &PmorState) -> f64 {
+        (0..2)
+            .map(|i| {
+                let speed = s.omega[i].abs();
+                let interval = self.model.gears[i].sample_step_rad();
+                if speed > 0.0 {
+                    interval / (STEPS_PER_SAMPLE_INTERVAL * speed)
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Advances by `duration` in steps of `self.integrator` no longer than `max_step` nor than the
+    /// speeds allow (`angular_step_bound_s`, taken at the call's start).
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
+        let max_step = max_step.min(self.angular_step_bound_s(s));
         // The settling to the new torques is a time step's solve too (its tolerance, its start
         // from the last solve's tangent): a master changes the torques at every call.
         if let Some(qs) = &self.quasi_static {
@@ -558,6 +585,9 @@ impl<'a> PmorDynamics<'a> {
         Ok(())
     }
 }
+
+/// Steps per angular sample interval Δϑ at the gears' speed (`PmorDynamics::angular_step_bound_s`).
+pub const STEPS_PER_SAMPLE_INTERVAL: f64 = 2.0;
 
 /// `duration` split into the fewest equal sub-steps no longer than `max_step`: (count, length).
 fn substeps(duration: f64, max_step: f64) -> (usize, f64) {
