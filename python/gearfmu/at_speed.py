@@ -109,16 +109,18 @@ def brake_case(fmu: Fmu, mesh_frequency_hz: float, step_s: float, torque_1_nm: f
 
 
 def run_up(fmu: Fmu, step_s: float, f_end_hz: float = 4000.0, ramp_s: float = 0.5, load_nm: float = 185.0,
+           f_start_hz: float | None = None,
            motor_inertia_kgm2: float = 0.01, shaft_stiffness_nm_per_rad: float = 2e4, bin_hz: float = 50.0,
            parameters: dict | None = None) -> dict:
-    """Issue 38's run-up: a motor inertia J_m under PI speed control (its target ramps from a tenth of
-    the end speed to the end speed over ``ramp_s``) drives gear 1 through a torsional shaft k_s
+    """Issue 38's run-up: a motor inertia J_m under PI speed control (its target ramps from the mesh
+    frequency ``f_start_hz``, default a tenth of the end's, to ``f_end_hz`` over ``ramp_s``; an end
+    below the start runs it down) drives gear 1 through a torsional shaft k_s
     (with a little damping) integrated by the master with symplectic Euler at the communication
     step; gear 2 carries the constant load (−``load_nm``). The DTE peak-to-peak is taken per bin of
     the mesh frequency z₁·ω₁/2π; the peak bin is the result."""
     z1, z2 = fmu.teeth
     w_end = 2.0 * math.pi * f_end_hz / z1
-    w_start = 0.1 * w_end
+    w_start = 2.0 * math.pi * (f_start_hz if f_start_hz is not None else 0.1 * f_end_hz) / z1
     j_m, k_s = motor_inertia_kgm2, shaft_stiffness_nm_per_rad
     # Shaft damping: 2 % of critical on the motor against a fixed end.
     c_s = 2.0 * 0.02 * math.sqrt(k_s * j_m)
@@ -126,7 +128,8 @@ def run_up(fmu: Fmu, step_s: float, f_end_hz: float = 4000.0, ramp_s: float = 0.
     j_total = j_m + fmu.start.get("inertia_1", 0.0) + fmu.start.get("inertia_2", 0.0) * (z1 / z2) ** 2
     wc = 2.0 * math.pi * 20.0
     kp, ki = 2.0 * wc * j_total, wc * wc * j_total
-    result = dict(step_s=step_s, f_end_hz=f_end_hz, ramp_s=ramp_s, error="")
+    result = dict(step_s=step_s, f_start_hz=z1 * w_start / (2.0 * math.pi), f_end_hz=f_end_hz, ramp_s=ramp_s,
+                  error="")
     n_steps = int(round(ramp_s / step_s))
     rows = []
     wall = 0.0

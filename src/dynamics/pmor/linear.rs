@@ -75,8 +75,23 @@ const STEP_LOAD_BACKOFF: f64 = 0.8;
 /// its range (the Hertz band wider than h/4 on a pair whose teeth are short against their
 /// load, e.g. a small helical pair near its yield torque) is lowered by `STEP_LOAD_BACKOFF`
 /// down to the ROM torque, and the load reached is the model's range (`IntegratorStep::torque_nm`).
+///
+/// The discrete gradient keeps the body modes up to `IMPLICIT_BODY_CUTOFF_PER_MESH_MODE` dynamic,
+/// which cost it no stability; its step rule stays velocity Verlet's on the pair condensed at the
+/// explicit cut-off (`BODY_CUTOFF_PER_MESH_MODE`), the accuracy its DTE was measured at.
 pub fn default_step(dynamics: &PmorDynamics) -> Result<IntegratorStep, String> {
+    use crate::dynamics::pmor::integrator::Integrator;
+    use crate::dynamics::pmor::quasi_static::{mesh_mode_estimate_hz, BODY_CUTOFF_PER_MESH_MODE};
     let model = dynamics.model;
+    let explicit_cutoff;
+    let dynamics = if dynamics.integrator == Integrator::DiscreteGradient && dynamics.condensed().is_some() {
+        let mut d = dynamics.with_mesh_damper(dynamics.mesh_damping_n_s_per_m);
+        d.set_quasi_static_cutoff(BODY_CUTOFF_PER_MESH_MODE * mesh_mode_estimate_hz(model));
+        explicit_cutoff = d;
+        &explicit_cutoff
+    } else {
+        dynamics
+    };
     let rom = model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
     let mut torque_nm = linearization_torque_nm(model);
     let retry = model.step_checked_torque_nm <= 0.0;

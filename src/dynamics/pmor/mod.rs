@@ -283,17 +283,21 @@ impl<'a> PmorDynamics<'a> {
     pub(crate) fn stencil(&self, i: usize, anchor: i64, theta: f64) -> Result<Stencil, String> {
         let g = &self.model.gears[i];
         let theta_ref = theta - anchor as f64 * g.pitch_rad();
-        // Within one integrator step a gear turns by far less than a sample interval; an angle
-        // beyond the stored samples means the state ran away, and the user needs that, not
+        // A step turns a gear by half a sample interval at most (`angular_step_bound_s`); an
+        // angle beyond the stored samples means the state ran away, and the user needs that, not
         // the sample bookkeeping.
         g.stencil(self.model.interpolation, theta_ref).map_err(|_| {
             format!(
-                "the state ran away: gear {} turned {} rad past its pitch within one integrator step \
-                 (θ = {} rad). Either the load is beyond what this model was built for (its step is \
-                 checked up to T₁ = {} N·m; rebuild with [operating] torque_nm or --rom-torques-nm at \
-                 the load you run), or max_step is beyond the integrator's stability limit",
+                "the state ran away: gear {} stood at {} rad of its anchored pitch ({} rad), beyond the \
+                 stored samples' reach of one sample interval ({} rad) past it, where a step turns the \
+                 gear by half an interval at most (θ = {} rad). Either the load is beyond what this \
+                 model was built for (its step is checked up to T₁ = {} N·m; rebuild with [operating] \
+                 torque_nm or --rom-torques-nm at the load you run), or max_step is beyond the \
+                 integrator's stability limit",
                 i + 1,
                 crate::gear::sig(theta_ref),
+                crate::gear::sig(g.pitch_rad()),
+                crate::gear::sig(g.sample_step_rad()),
                 crate::gear::sig(theta),
                 crate::gear::sig(linear::linearization_torque_nm(self.model))
             )
@@ -545,8 +549,30 @@ impl<'a> PmorDynamics<'a> {
 
     /// Advances by `duration` in steps of `self.integrator` no longer than `max_step` nor than the
     /// speeds allow (`angular_step_bound_s`, taken at the call's start).
+    ///
+    /// A call that fails (a Newton solve that does not converge at an impact, a state the step
+    /// took beyond the stored samples) is run once more from its start with a fresh solver start
+    /// and an eighth of the step: what a smaller step would complete, completes. What fails
+    /// then is reported with both messages.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
         let max_step = max_step.min(self.angular_step_bound_s(s));
+        let call_start = s.clone();
+        self.advance_at(s, torques, duration, max_step).or_else(|first| {
+            *s = call_start;
+            let retry_step = max_step / RETRY_STEP_DIVISOR;
+            self.advance_at(s, torques, duration, retry_step).map_err(|second| {
+                format!(
+                    "{second} (the call was retried from its start at a step of {retry_step:e} s after: {first}). \
+                     The state is beyond what this model resolves: a load beyond the model's range, \
+                     or a speed or torque change within one communication step that no sub-step follows; \
+                     take shorter communication steps, or rebuild the model at the load you run"
+                )
+            })
+        })
+    }
+
+    /// `advance` with the sub-step bound given, no retry.
+    fn advance_at(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
         // The settling to the new torques is a time step's solve too (its tolerance, its start
         // from the last solve's tangent): a master changes the torques at every call.
         if let Some(qs) = &self.quasi_static {
@@ -588,6 +614,9 @@ impl<'a> PmorDynamics<'a> {
 
 /// Steps per angular sample interval Δϑ at the gears' speed (`PmorDynamics::angular_step_bound_s`).
 pub const STEPS_PER_SAMPLE_INTERVAL: f64 = 2.0;
+
+/// A failed call is retried once from its start at the step over this (`PmorDynamics::advance`).
+const RETRY_STEP_DIVISOR: f64 = 8.0;
 
 /// `duration` split into the fewest equal sub-steps no longer than `max_step`: (count, length).
 fn substeps(duration: f64, max_step: f64) -> (usize, f64) {

@@ -64,22 +64,46 @@ pub enum Condensation {
 pub const HUB_CUTOFF: f64 = 1.5;
 
 /// The body modes above this multiple of the mesh mode's 2-DOF estimate √(k̄/m_e)/2π (FE
-/// inertias) are condensed with the fast coordinates: they bound the explicit step, yet at the
-/// mesh mode and below — everything a drivetrain resolves — a mode at ≥ 3× the excitation
-/// responds within 1/(1 − 1/9) = 1.125 of its static response, which is what the condensation
-/// keeps. Measured on example 3 (Kurokawa spur pair, 20 µs sampling, against no cut-off):
-/// factors 6, 4, 3 and 2 leave the DTE mean within 0.002 % and its RMS and peak-to-peak within
-/// 0.14 %; 3 keeps the third mesh-mode multiple for mesh harmonics at speed.
+/// inertias) are condensed with the fast coordinates under an explicit integrator (velocity
+/// Verlet, RK4): they bound its step, yet at the mesh mode and below — everything a drivetrain
+/// resolves — a mode at ≥ 3× the excitation responds within 1/(1 − 1/9) = 1.125 of its static
+/// response, which is what the condensation keeps. Measured on example 3 (Kurokawa spur pair,
+/// 20 µs sampling, against no cut-off): factors 6, 4, 3 and 2 leave the DTE mean within 0.002 %
+/// and its RMS and peak-to-peak within 0.14 %. It is also the step rule of the discrete
+/// gradient (`linear::default_step`), which keeps more modes dynamic
+/// (`IMPLICIT_BODY_CUTOFF_PER_MESH_MODE`).
 pub const BODY_CUTOFF_PER_MESH_MODE: f64 = 3.0;
 
-/// The cut-off frequency (Hz) above which a body mode is quasi-static: `BODY_CUTOFF_PER_MESH_MODE`
-/// times the mesh mode's estimate, or none (infinite) before the build has measured k̄.
+/// The discrete gradient's cut-off. It is unconditionally stable, so a dynamic body mode costs it
+/// no step, and at speed the condensed modes' missing dynamic amplification is what moved the
+/// mesh mode (issue 38): linearized at 250 N·m on the Kurokawa spur pair, the mesh mode lies
+/// 1.7–1.9 % above the full model's (every coordinate with its inertia) with the cut-off at 3×,
+/// 0.4–0.5 % with it at 6× or with every body mode dynamic (0.3 % of that 1.3 % is the step
+/// from 6× to all); through the resonance (fmpy, 10 µs coupling, 2.9–3.4 kHz mesh frequency)
+/// the steady DTE RMS went from 3.3–5.4 % above the full model's to 1.0–1.8 % at the spec's
+/// mesh damper, and from up to 21 % to ≤ 3.8 % without it. The remaining 0.4 % is the shapes'
+/// and hub's own inertia, which the condensation drops by design (`examples/mesh_mode_condensation.rs`).
+pub const IMPLICIT_BODY_CUTOFF_PER_MESH_MODE: f64 = 6.0;
+
+/// The cut-off frequency (Hz) above which a body mode is quasi-static under the model's
+/// integrator: `IMPLICIT_BODY_CUTOFF_PER_MESH_MODE` for the discrete gradient,
+/// `BODY_CUTOFF_PER_MESH_MODE` for an explicit one, times the mesh mode's estimate; none
+/// (infinite) before the build has measured k̄.
 pub fn body_cutoff_hz(model: &super::model::PmorModel) -> f64 {
-    let factor = BODY_CUTOFF_PER_MESH_MODE;
+    let factor = match model.integrator {
+        super::integrator::Integrator::DiscreteGradient => IMPLICIT_BODY_CUTOFF_PER_MESH_MODE,
+        _ => BODY_CUTOFF_PER_MESH_MODE,
+    };
+    factor * mesh_mode_estimate_hz(model)
+}
+
+/// The mesh mode's 2-DOF estimate √(k̄/m_e)/2π at the FE inertias (Hz), infinite before the build
+/// has measured k̄.
+pub fn mesh_mode_estimate_hz(model: &super::model::PmorModel) -> f64 {
     let inertia = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
     let k = model.mesh_stiffness_n_per_m;
     if k > 0.0 {
-        factor * (k / model.mesh_mass_kg(inertia)).sqrt() / (2.0 * std::f64::consts::PI)
+        (k / model.mesh_mass_kg(inertia)).sqrt() / (2.0 * std::f64::consts::PI)
     } else {
         f64::INFINITY
     }
