@@ -61,3 +61,23 @@ def test_a_run_up_through_the_mesh_resonance_completes_and_sees_it(spur_fmus, ki
     assert 2500.0 < r["peak_frequency_hz"] < 3600.0, r["peak_frequency_hz"]
     assert r["peak_dte_pp_m"] > 2.0 * low, (r["peak_dte_pp_m"], low)
     assert math.isfinite(r["real_time_factor"])
+
+
+def test_fmpys_own_master_runs_the_pmor_fmu_through_the_resonance_at_odd_steps(gear_fmus):
+    """A master loop not written here (fmpy.simulate_fmu) at communication steps that divide
+    neither the mesh period nor the default sub-step (37 and 73 µs), at 2.9 and 3.0 kHz with
+    contact loss: completes, and with balanced torques (T₂ = −T₁z₂/z₁, no brake) ω₂ stays within
+    1 % of its start (only the damping's losses slow the pair)."""
+    import numpy as np
+    from fmpy import simulate_fmu
+
+    z1, z2 = 21, 31
+    for f_mesh, h in [(2900.0, 3.7e-5), (3000.0, 7.3e-5)]:
+        w2 = 2.0 * math.pi * f_mesh / z2
+        inputs = np.array([(0.0, 185.0, -185.0 * z2 / z1), (1.0, 185.0, -185.0 * z2 / z1)],
+                          dtype=[("time", float), ("tau_1", float), ("tau_2", float)])
+        r = simulate_fmu(str(gear_fmus["spur-pmor"].fmu_path), stop_time=0.02, step_size=h, output_interval=h,
+                         start_values={"w_1_start": w2 * z2 / z1, "w_2_start": w2}, input=inputs,
+                         output=["w_2", "dte", "contact_pairs"])
+        assert abs(r["w_2"][-1] / w2 - 1.0) < 0.01, (f_mesh, r["w_2"][-1] / w2)
+        assert np.any(r["contact_pairs"] == 0), "the resonance should lose contact"
