@@ -77,14 +77,20 @@ const STEP_LOAD_BACKOFF: f64 = 0.8;
 /// down to the ROM torque, and the load reached is the model's range (`IntegratorStep::torque_nm`).
 ///
 /// The discrete gradient keeps the body modes up to `IMPLICIT_BODY_CUTOFF_PER_MESH_MODE` dynamic,
-/// which cost it no stability; its step rule stays velocity Verlet's on the pair condensed at the
-/// explicit cut-off (`BODY_CUTOFF_PER_MESH_MODE`), the accuracy its DTE was measured at.
+/// which cost it no stability; at that cut-off its step rule stays velocity Verlet's on the pair
+/// condensed at the explicit one (`BODY_CUTOFF_PER_MESH_MODE`), the accuracy its DTE was measured
+/// at.
 pub fn default_step(dynamics: &PmorDynamics) -> Result<IntegratorStep, String> {
     use crate::dynamics::pmor::integrator::Integrator;
     use crate::dynamics::pmor::quasi_static::{mesh_mode_estimate_hz, BODY_CUTOFF_PER_MESH_MODE};
     let model = dynamics.model;
     let explicit_cutoff;
-    let dynamics = if dynamics.integrator == Integrator::DiscreteGradient && dynamics.condensed().is_some() {
+    // Only at the discrete gradient's own cut-off: a study that sets another (every body mode
+    // dynamic, say) gets the limit of what it integrates.
+    let at_implicit_cutoff = dynamics
+        .condensed()
+        .is_some_and(|q| q.splits[0].cutoff_hz == crate::dynamics::pmor::quasi_static::body_cutoff_hz(model));
+    let dynamics = if dynamics.integrator == Integrator::DiscreteGradient && at_implicit_cutoff {
         let mut d = dynamics.with_mesh_damper(dynamics.mesh_damping_n_s_per_m);
         d.set_quasi_static_cutoff(BODY_CUTOFF_PER_MESH_MODE * mesh_mode_estimate_hz(model));
         explicit_cutoff = d;
