@@ -33,9 +33,11 @@
 //! contact's nonlinearity the energy-conserving integrator's soak showed it creating 3e-5 of
 //! the energy in play at a load reversal.)
 //!
-//! Damping acts on the slow coordinates only: the modal damping of Φ on η̇_Φ = Q·ξ̇, and the
-//! mesh damper on the approach rate the slow motion makes. The shapes' own damping ratio has
-//! no coordinate to act on and is not used.
+//! Damping acts on the slow coordinates only: the modal damping of Φ on η̇_Φ = Q·ξ̇, the mesh
+//! damper on the approach rate the slow motion makes, and the shapes' damping D_Ψ on the rate the
+//! quasi-static shapes follow the slow motion with, carried onto it through the equilibrium's
+//! tangent (`damp_the_shapes`; issue 38: without it the mesh mode lost the full pair's shape
+//! damping, and with it the run-up through the resonance that of the full pair).
 //!
 //! The hub direction is condensed only where its free frequency (the pencil (Λ, M_ΦΦ − bbᵀ/J) on
 //! the retained modes) lies above the cut-off: a bore given a shaft's inertia (`inertia_i` above
@@ -481,6 +483,8 @@ struct Evaluation {
     acceleration: Vec<f64>,
     /// The dissipation power (W): modal damping and the mesh damper on the slow motion.
     dissipation_w: f64,
+    /// Per gear, the shapes' damping D_Ψ(ϑ) at this pose (n_t × n_t; empty where undamped).
+    shape_damping: [DMatrix<f64>; 2],
     outputs: PmorOutputs,
 }
 
@@ -557,10 +561,19 @@ impl<'a> PmorDynamics<'a> {
         let mut acceleration = vec![0.0; l.n_q[0] + l.n_q[1]];
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
         let mut dissipation = contact.damper_power_w;
+        let mut shape_damping = [DMatrix::zeros(0, 0), DMatrix::zeros(0, 0)];
         for i in 0..2 {
             let g = &model.gears[i];
             let sp = &qs.splits[i];
             let (n_k, n_t) = (g.modes(), g.shapes);
+            let ratio = self.damping[i].shapes_ratio;
+            if ratio > 0.0 && n_t > 0 {
+                // D_Ψ(ϑ) = 2ζ·((1 − p)·D_s + p·D_{s+1}), as the full pair's (`equations::gear_terms`).
+                let st = &stencils[i];
+                let (lo, hi) = (&g.shape_damping_roots[st.a0 + 1], &g.shape_damping_roots[st.a0 + 2]);
+                let p = st.fraction;
+                shape_damping[i] = DMatrix::from_fn(n_t, n_t, |r, c| 2.0 * ratio * ((1.0 - p) * lo[(r, c)] + p * hi[(r, c)]));
+            }
             let (eta, theta, velocity) = &expanded[i];
             let (eta_phi, eta_psi) = eta.split_at(n_k);
             let z_off = if i == 0 { 0 } else { n_z[0] };
@@ -650,6 +663,7 @@ impl<'a> PmorDynamics<'a> {
             shape_slope,
             acceleration,
             dissipation_w: dissipation,
+            shape_damping,
             outputs: out,
         })
     }
@@ -776,11 +790,13 @@ impl<'a> PmorDynamics<'a> {
                     + torques[1] * (e.outputs.bore_theta[1] - bore_before[1])
                     - 0.5 * decrement;
                 keep(shifted(&z, &dz, 1.0));
+                self.damp_the_shapes(qs, y, &mut e)?;
                 self.remember(qs, positions, torques, &mut e);
                 return Ok(e);
             }
             if decrement.abs() <= NEWTON_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
                 keep(z);
+                self.damp_the_shapes(qs, y, &mut e)?;
                 self.remember(qs, positions, torques, &mut e);
                 return Ok(e);
             }
@@ -821,15 +837,17 @@ impl<'a> PmorDynamics<'a> {
         ))
     }
 
-    /// Keeps the solution's linearization for the next solve's start (`Prediction`).
-    fn remember(&self, qs: &QuasiStatic, positions: &[f64], torques: [f64; 2], e: &mut Evaluation) {
+    /// Per loaded section, its row r_s = ∂α_s/∂y in the slow positions (φ, ξ per gear), mapped as
+    /// a force is: a force P along the section acts on the slow coordinates as P·r_s.
+    fn slow_rows(&self, qs: &QuasiStatic, e: &Evaluation) -> Vec<Vec<f64>> {
         let l = self.layout();
-        let Some(tangent) = e.tangent.take() else { return };
-        let sections = &e.outputs.contact.sections;
-        let slow_rows = sections
+        let n_q = l.n_q[0] + l.n_q[1];
+        e.outputs
+            .contact
+            .sections
             .iter()
             .map(|section| {
-                let mut row = vec![0.0; positions.len()];
+                let mut row = vec![0.0; n_q];
                 for i in 0..2 {
                     let n_k = self.model.gears[i].modes();
                     let rows = &section.rows[i];
@@ -840,7 +858,83 @@ impl<'a> PmorDynamics<'a> {
                 }
                 row
             })
-            .collect();
+            .collect()
+    }
+
+    /// The contact shapes' damping carried onto the slow motion. The shapes are quasi-static, so
+    /// their rate follows the slow velocity v through the equilibrium (the implicit function
+    /// theorem, as `Prediction`): K·ż = −Σ_s k_s·g_s·(r_s·v), and the damping force −D_Ψ·ż they
+    /// feel acts on the slow coordinates by virtual work through the same tangent:
+    /// f = (∂z/∂y)ᵀ(−D_Ψ·ż) = Σ_s r_s·k_s·g_s·K⁻¹·D_Ψ·ż, which dissipates żᵀD_Ψż ≥ 0. This is the full
+    /// pair's shape damping (the build's `shape_damping_ratio`) at frequencies far below the
+    /// shapes' own: without it the mesh mode keeps only the body modes' share of damping
+    /// (linearized ζ 0.05–0.09 % on the Kurokawa spur pair without a mesh damper, 0.32–0.41 %
+    /// in the full pair; issue 38).
+    fn damp_the_shapes(&self, qs: &QuasiStatic, y: &[f64], e: &mut Evaluation) -> Result<(), String> {
+        if e.shape_damping.iter().all(|d| d.nrows() == 0) || e.outputs.contact.sections.is_empty() {
+            return Ok(());
+        }
+        let Some(tangent) = e.tangent.as_ref() else { return Ok(()) };
+        let l = self.layout();
+        let n_q = l.n_q[0] + l.n_q[1];
+        let velocity = &y[n_q..2 * n_q];
+        let slow_rows = self.slow_rows(qs, e);
+        let stiffness: Vec<f64> = e.outputs.contact.sections.iter().map(|s| s.stiffness_n_per_m).collect();
+        let n_z0 = qs.fast.borrow()[0].len();
+        let n_z = e.residual.len();
+        let mut force = DVector::zeros(n_z);
+        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(&slow_rows) {
+            let approach_rate: f64 = r.iter().zip(velocity).map(|(r, v)| r * v).sum();
+            force.axpy(-k * approach_rate, g, 1.0);
+        }
+        let rate = tangent.solve(&force, &e.fast_rows, &stiffness)?;
+        // D_Ψ·ż on each gear's shape block (the last n_t of its fast coordinates).
+        let mut damping_force = DVector::zeros(n_z);
+        let mut power = 0.0;
+        for i in 0..2 {
+            let d = &e.shape_damping[i];
+            let n_t = d.nrows();
+            if n_t == 0 {
+                continue;
+            }
+            let end = if i == 0 { n_z0 } else { n_z };
+            let start = end - n_t;
+            for a in 0..n_t {
+                let f: f64 = (0..n_t).map(|b| d[(a, b)] * rate[start + b]).sum();
+                damping_force[start + a] = f;
+                power += rate[start + a] * f;
+            }
+        }
+        let w = tangent.solve(&damping_force, &e.fast_rows, &stiffness)?;
+        let mut on_slow = vec![0.0; n_q];
+        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(&slow_rows) {
+            let share = k * g.dot(&w);
+            on_slow.iter_mut().zip(r).for_each(|(f, r)| *f += share * r);
+        }
+        for i in 0..2 {
+            let sp = &qs.splits[i];
+            let q = l.q(i);
+            let n = l.n_q[i];
+            e.acceleration[q] += on_slow[q] / sp.inertia_kgm2;
+            let mut xi_acc = DVector::from_column_slice(&on_slow[q + 1..q + n]);
+            sp.xi_acceleration(&mut xi_acc);
+            for (a, d) in e.acceleration[q + 1..q + n].iter_mut().zip(xi_acc.iter()) {
+                *a += d;
+            }
+        }
+        // Dq̇'s sign: the force the damping takes away.
+        for (d, f) in e.outputs.damping_force.iter_mut().zip(&on_slow) {
+            *d -= f;
+        }
+        e.dissipation_w += power;
+        Ok(())
+    }
+
+    /// Keeps the solution's linearization for the next solve's start (`Prediction`).
+    fn remember(&self, qs: &QuasiStatic, positions: &[f64], torques: [f64; 2], e: &mut Evaluation) {
+        let slow_rows = self.slow_rows(qs, e);
+        let Some(tangent) = e.tangent.take() else { return };
+        let sections = &e.outputs.contact.sections;
         *qs.prediction.borrow_mut() = Some(Prediction {
             positions: positions.to_vec(),
             torques,
