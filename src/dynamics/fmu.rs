@@ -135,6 +135,34 @@ pub struct GearPairState {
     /// Start from the static equilibrium under τ₁ (`start_at_equilibrium`).
     #[serde(default)]
     pub start_at_equilibrium: bool,
+    /// PMOR-Hertz: the contact outputs and stored energy at `pmor`, evaluated once where the state
+    /// was made (ExitInitializationMode, doStep) and read by every GetReal/GetInteger and the
+    /// next doStep's settling (issue 39: a master that reads every output each step, as
+    /// libcosim's observer does, cost three contact evaluations per step). A function of `pmor`
+    /// alone, so an FMU state carries it as it carries `pmor`.
+    #[serde(default)]
+    pub pmor_outputs: Option<PmorPortOutputs>,
+}
+
+/// The contact outputs of a PMOR-Hertz state, kept beside it (`GearPairState::pmor_outputs`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PmorPortOutputs {
+    pub mesh_force_n: f64,
+    pub mesh_stiffness_n_per_m: f64,
+    pub contact_pairs: u32,
+    /// Elastic and contact energy (J): what the next settling's energy booking starts from.
+    pub stored_j: f64,
+}
+
+impl PmorPortOutputs {
+    fn of(out: &PmorOutputs) -> Self {
+        PmorPortOutputs {
+            mesh_force_n: out.contact.normal_force_n,
+            mesh_stiffness_n_per_m: out.contact.tangent_stiffness_n_per_m,
+            contact_pairs: out.contact.pairs_in_contact,
+            stored_j: out.elastic_j + out.contact_j,
+        }
+    }
 }
 
 /// What a run may not silently leave (issue 25): the same rules for both models, checked on the
@@ -226,11 +254,18 @@ pub struct LoadedPair {
     pub validity: Validity,
     /// PMOR-Hertz, condensed: each gear's split into slow and quasi-static coordinates at the FE
     /// inertias (an eigen-decomposition per gear), made once rather than per call.
-    default_splits: Option<[GearSplit; 2]>,
+    default_splits: Option<Arc<[GearSplit; 2]>>,
+    /// The same for inertias above the FE values (a gear on a shaft, `inertia_i`), made once per
+    /// set (the added inertias, as bits) and kept (issue 39: made per doStep and per GetReal of an
+    /// angle or speed before).
+    splits_by_inertia: std::sync::Mutex<Vec<([u64; 2], Arc<[GearSplit; 2]>)>>,
 }
 
 /// Stability limits kept per PMOR-Hertz model for parameter sets other than the build's.
 const STABILITY_LIMITS_KEPT: usize = 16;
+
+/// Sets of splits kept per PMOR-Hertz model for inertias above the FE values.
+const SPLITS_KEPT: usize = 16;
 
 /// The lumped model's (s).
 pub const LUMPED_DEFAULT_MAX_STEP_S: f64 = 1e-5;
@@ -305,10 +340,10 @@ impl LoadedPair {
         let default_splits = match &physics {
             Physics::PmorHertz { model, .. } if model.condensation == Condensation::QuasiStatic => {
                 let cutoff_hz = crate::dynamics::pmor::quasi_static::body_cutoff_hz(model);
-                Some([
+                Some(Arc::new([
                     GearSplit::new(&model.gears[0], 0.0, cutoff_hz)?,
                     GearSplit::new(&model.gears[1], 0.0, cutoff_hz)?,
-                ])
+                ]))
             }
             _ => None,
         };
@@ -320,6 +355,7 @@ impl LoadedPair {
             stability_limits: Default::default(),
             validity,
             default_splits,
+            splits_by_inertia: Default::default(),
         })
     }
 }
@@ -354,17 +390,47 @@ impl GearPairFmu {
     /// build's modal damping, and the mesh damper from mesh_damping_ratio, defined as the lumped
     /// model's: c = 2ζ√(k̄·m_e), k̄ the pair's mean mesh stiffness, m_e = 1/(r_b1²/J₁ + r_b2²/J₂).
     pub fn pmor<'a>(&'a self, model: &'a PmorModel, place: &'a PairPlacement, s: &GearPairState) -> PmorDynamics<'a> {
-        let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
         let p = &s.params;
-        let added = [p.inertia_1_kgm2 - fe[0], p.inertia_2_kgm2 - fe[1]];
+        let added = Self::added_inertia(model, s);
         let damping = model.damping(model.modal_damping_ratio, model.shape_damping_ratio);
-        let mut dynamics = match &self.default_splits {
-            Some(splits) if added == [0.0; 2] => PmorDynamics::with_splits(model, place, damping, splits),
-            _ => PmorDynamics::new(model, place, damping, added),
+        let mut dynamics = match self.splits(model, added) {
+            Some(splits) => PmorDynamics::with_splits(model, place, damping, added, &splits),
+            None => PmorDynamics::new(model, place, damping, added),
         };
         dynamics.mesh_damping_n_s_per_m =
             model.mesh_damper_n_s_per_m(p.mesh_damping_ratio, [p.inertia_1_kgm2, p.inertia_2_kgm2]);
         dynamics
+    }
+
+    /// The condensed pair's splits with rigid inertia `added` at the bores (kg·m²): the build's
+    /// at none, else from the kept sets or made and kept (at most `SPLITS_KEPT` sets). `None` where
+    /// the model is not condensed or a split cannot be made (`PmorDynamics::new` then says why).
+    fn splits(&self, model: &PmorModel, added: [f64; 2]) -> Option<Arc<[GearSplit; 2]>> {
+        let default = self.default_splits.as_ref()?;
+        if added == [0.0; 2] {
+            return Some(default.clone());
+        }
+        let key = added.map(f64::to_bits);
+        let mut kept = self.splits_by_inertia.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, splits)) = kept.iter().find(|(k, _)| *k == key) {
+            return Some(splits.clone());
+        }
+        let cutoff_hz = crate::dynamics::pmor::quasi_static::body_cutoff_hz(model);
+        let splits = Arc::new([
+            GearSplit::new(&model.gears[0], added[0], cutoff_hz).ok()?,
+            GearSplit::new(&model.gears[1], added[1], cutoff_hz).ok()?,
+        ]);
+        if kept.len() >= SPLITS_KEPT {
+            kept.remove(0);
+        }
+        kept.push((key, splits.clone()));
+        Some(splits)
+    }
+
+    /// The rigid inertia an instance adds at each bore (kg·m²): inertia_i above the FE value.
+    fn added_inertia(model: &PmorModel, s: &GearPairState) -> [f64; 2] {
+        let fe = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+        [s.params.inertia_1_kgm2 - fe[0], s.params.inertia_2_kgm2 - fe[1]]
     }
 
     fn pmor_outputs(&self, s: &GearPairState) -> Result<Option<(PmorOutputs, PmorState)>, String> {
@@ -589,6 +655,7 @@ impl Model for GearPairFmu {
             start_energy_j: 0.0,
             max_step_set: false,
             start_at_equilibrium: false,
+            pmor_outputs: None,
         }
     }
 
@@ -620,6 +687,7 @@ impl Model for GearPairFmu {
         if matches!(phase, Phase::Instantiated | Phase::InitializationMode) {
             s.mech = s.start;
             s.pmor = None;
+            s.pmor_outputs = None;
         }
         Ok(())
     }
@@ -639,16 +707,22 @@ impl Model for GearPairFmu {
             Physics::PmorHertz { model, place } => {
                 let needs_contact = matches!(var, Var::MeshForce | Var::MeshStiffness);
                 let ports = |p: &PmorState| -> Result<_, String> {
+                    // Condensed, the ports are the splits' mean axes: no dynamics to set up.
+                    if let Some(sp) = self.splits(model, Self::added_inertia(model, s)) {
+                        let port = |i: usize| sp[i].mean_axis_port(&p.eta[i], &p.eta_dot[i], p.theta[i], p.omega[i]);
+                        return Ok(bores_and_ports(p.theta, [port(0), port(1)]));
+                    }
                     let dynamics = self.pmor(model, place, s);
                     Ok(bores_and_ports(p.theta, [dynamics.port(0, p)?, dynamics.port(1, p)?]))
                 };
-                match &s.pmor {
-                    Some(p) if !needs_contact => (ports(p)?, f64::NAN, f64::NAN),
+                match (&s.pmor, &s.pmor_outputs) {
+                    (Some(p), Some(o)) => (ports(p)?, o.mesh_force_n, o.mesh_stiffness_n_per_m),
+                    (Some(p), None) if !needs_contact => (ports(p)?, f64::NAN, f64::NAN),
                     // Before initialization the pair sits at its start values with η = 0 (port
                     // = bore): angles and speeds need no contact evaluation, which a start angle
                     // pressing the flanks beyond Hertz's range would refuse (found by fuzzing: a
                     // GetReal of tau_1 failed on it).
-                    None if !needs_contact => {
+                    (None, _) if !needs_contact => {
                         let theta = [s.mech.theta_1, s.mech.theta_2];
                         ((theta, theta, [s.mech.omega_1, s.mech.omega_2]), f64::NAN, f64::NAN)
                     }
@@ -690,9 +764,10 @@ impl Model for GearPairFmu {
         match self.var(vr)? {
             Var::ContactPairs => match &self.physics {
                 Physics::Lumped(mesh) => Ok(LumpedModel::new(mesh, s.params).pairs_in_contact(&s.mech) as i32),
-                Physics::PmorHertz { .. } => {
-                    Ok(self.pmor_outputs(s)?.expect("PMOR-Hertz physics").0.contact.pairs_in_contact as i32)
-                }
+                Physics::PmorHertz { .. } => match (&s.pmor, &s.pmor_outputs) {
+                    (Some(_), Some(o)) => Ok(o.contact_pairs as i32),
+                    _ => Ok(self.pmor_outputs(s)?.expect("PMOR-Hertz physics").0.contact.pairs_in_contact as i32),
+                },
             },
             other => Err(format!("value reference {vr} ({}) is not an Integer", other.name())),
         }
@@ -753,8 +828,10 @@ impl Model for GearPairFmu {
                 )?
             };
             // The start must be a state the model can evaluate (e.g. no coast-flank contact).
-            s.start_energy_j = dynamics.outputs(&start)?.total_energy_j();
+            let out = dynamics.outputs(&start)?;
+            s.start_energy_j = out.total_energy_j();
             s.pmor = Some(start);
+            s.pmor_outputs = Some(PmorPortOutputs::of(&out));
         }
         // Finite start values can still hold an energy beyond f64 (a speed of 1e300 rad/s): refused
         // here, so no state with a non-finite energy reference is ever stored.
@@ -802,6 +879,9 @@ impl Model for GearPairFmu {
                 }
                 finite("the PMOR-Hertz rigid state", &[p.theta, p.omega].concat())?;
                 finite("the PMOR-Hertz state's torques", &p.torques_nm)?;
+                if let Some(o) = &s.pmor_outputs {
+                    finite("the PMOR-Hertz contact outputs", &[o.mesh_force_n, o.mesh_stiffness_n_per_m, o.stored_j])?;
+                }
                 finite("the PMOR-Hertz energy terms", &[p.input_work_j, p.dissipated_j, s.start_energy_j])
             }
         }
@@ -815,11 +895,13 @@ impl Model for GearPairFmu {
             Physics::PmorHertz { model, place } => {
                 let mut state = s.pmor.clone().ok_or("the PMOR-Hertz state is not initialized")?;
                 let dynamics = self.pmor(model, place, s);
-                dynamics.advance(&mut state, s.torques_nm, h, s.max_step_s)?;
+                let stored_j = s.pmor_outputs.map(|o| o.stored_j);
+                dynamics.advance_knowing(&mut state, s.torques_nm, h, s.max_step_s, stored_j)?;
                 let end = dynamics.outputs(&state)?;
                 // The work integrals start at zero (`PmorModel::initial_state`).
                 energy_balance([s.start_energy_j, end.total_energy_j()], [state.input_work_j, state.dissipated_j])?;
                 s.pmor = Some(state);
+                s.pmor_outputs = Some(PmorPortOutputs::of(&end));
                 let warnings = self.validity.check(end.contact.normal_force_n, &mut s.warned);
                 s.pending_warnings.extend(warnings);
                 return Ok(());

@@ -198,15 +198,16 @@ impl<'a> PmorDynamics<'a> {
         }
     }
 
-    /// The condensed pair at the FE inertias with the gears' splits made before (an FMU makes
-    /// them once: `GearSplit::new` costs an eigen-decomposition per gear).
+    /// The condensed pair with the gears' splits made before for these added inertias (an FMU
+    /// makes them once per inertia set: `GearSplit::new` costs an eigen-decomposition per gear).
     pub fn with_splits(
         model: &'a PmorModel,
         place: &'a PairPlacement,
         damping: [Damping; 2],
+        added_inertia_kgm2: [f64; 2],
         splits: &[quasi_static::GearSplit; 2],
     ) -> Self {
-        let mut d = PmorDynamics::new_without_condensation(model, place, damping, [0.0; 2]);
+        let mut d = PmorDynamics::new_without_condensation(model, place, damping, added_inertia_kgm2);
         d.quasi_static = Some(QuasiStatic::from_splits(model, splits.clone()));
         d
     }
@@ -425,14 +426,7 @@ impl<'a> PmorDynamics<'a> {
     pub fn port(&self, i: usize, s: &PmorState) -> Result<(f64, f64), String> {
         let g = &self.model.gears[i];
         if let Some(qs) = &self.quasi_static {
-            // The slow angle φ and its rate: the shapes carry no inertia here.
-            let sp = &qs.splits[i];
-            let n_k = g.modes();
-            let dot = |a: &[f64]| sp.b.as_slice().iter().zip(a).map(|(x, y)| x * y).sum::<f64>();
-            return Ok((
-                s.theta[i] + dot(&s.eta[i][..n_k]) / sp.inertia_kgm2,
-                s.omega[i] + dot(&s.eta_dot[i][..n_k]) / sp.inertia_kgm2,
-            ));
+            return Ok(qs.splits[i].mean_axis_port(&s.eta[i], &s.eta_dot[i], s.theta[i], s.omega[i]));
         }
         let st = self.stencil(i, s.anchor[i], s.theta[i])?;
         let n_k = g.modes();
@@ -555,12 +549,26 @@ impl<'a> PmorDynamics<'a> {
     /// and an eighth of the step: what a smaller step would complete, completes. What fails
     /// then is reported with both messages.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
+        self.advance_knowing(s, torques, duration, max_step, None)
+    }
+
+    /// `advance` where the caller knows the elastic and contact energy at `s` (J; what
+    /// `outputs(s)` returns as `elastic_j + contact_j`): the settling to new torques books its
+    /// work against it instead of evaluating the state again.
+    pub fn advance_knowing(
+        &self,
+        s: &mut PmorState,
+        torques: [f64; 2],
+        duration: f64,
+        max_step: f64,
+        stored_j: Option<f64>,
+    ) -> Result<(), String> {
         let max_step = max_step.min(self.angular_step_bound_s(s));
         let call_start = s.clone();
-        self.advance_at(s, torques, duration, max_step).or_else(|first| {
+        self.advance_at(s, torques, duration, max_step, stored_j).or_else(|first| {
             *s = call_start;
             let retry_step = max_step / RETRY_STEP_DIVISOR;
-            self.advance_at(s, torques, duration, retry_step).map_err(|second| {
+            self.advance_at(s, torques, duration, retry_step, stored_j).map_err(|second| {
                 format!(
                     "{second} (the call was retried from its start at a step of {retry_step:e} s after: {first}). \
                      The state is beyond what this model resolves: a load beyond the model's range, \
@@ -572,13 +580,20 @@ impl<'a> PmorDynamics<'a> {
     }
 
     /// `advance` with the sub-step bound given, no retry.
-    fn advance_at(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
+    fn advance_at(
+        &self,
+        s: &mut PmorState,
+        torques: [f64; 2],
+        duration: f64,
+        max_step: f64,
+        stored_j: Option<f64>,
+    ) -> Result<(), String> {
         // The settling to the new torques is a time step's solve too (its tolerance, its start
         // from the last solve's tangent): a master changes the torques at every call.
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(true);
         }
-        let result = self.settle(s, torques).and_then(|first| match self.integrator {
+        let result = self.settle_knowing(s, torques, stored_j).and_then(|first| match self.integrator {
             Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
             Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first),
             // The discrete gradient needs the condensation's constant slow mass; the full pair

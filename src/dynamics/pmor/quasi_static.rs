@@ -175,6 +175,15 @@ pub struct GearSplit {
 }
 
 impl GearSplit {
+    /// The gear's port, condensed (`PmorDynamics::port`): the slow angle φ = θ + bᵀη_Φ/J and its
+    /// rate, from the bore's θ, ω and the elastic state η, η̇ (η_Φ first); the shapes carry no
+    /// inertia here.
+    pub fn mean_axis_port(&self, eta: &[f64], eta_dot: &[f64], theta: f64, omega: f64) -> (f64, f64) {
+        let n_k = self.b.len();
+        let dot = |a: &[f64]| self.b.as_slice().iter().zip(&a[..n_k]).map(|(x, y)| x * y).sum::<f64>();
+        (theta + dot(eta) / self.inertia_kgm2, omega + dot(eta_dot) / self.inertia_kgm2)
+    }
+
     pub fn new(gear: &super::model::PmorGear, added_inertia_kgm2: f64, cutoff_hz: f64) -> Result<Self, String> {
         let n_k = gear.modes();
         let inertia = gear.polar_inertia_kgm2 + added_inertia_kgm2;
@@ -1031,13 +1040,27 @@ impl<'a> PmorDynamics<'a> {
     /// it the stored energy does not take as dissipated.
     /// Returns the right-hand side there (condensed), a time stepper's first.
     pub fn settle(&self, s: &mut PmorState, torques: [f64; 2]) -> Result<Option<(Vec<f64>, PmorOutputs)>, String> {
+        self.settle_knowing(s, torques, None)
+    }
+
+    /// `settle` where the caller knows the elastic and contact energy at `s` (J; `outputs(s)`'s).
+    pub fn settle_knowing(
+        &self,
+        s: &mut PmorState,
+        torques: [f64; 2],
+        stored_j: Option<f64>,
+    ) -> Result<Option<(Vec<f64>, PmorOutputs)>, String> {
         let Some(qs) = self.condensed() else {
             s.torques_nm = torques;
             return Ok(None);
         };
         let before = s.theta;
         let stored = |o: &PmorOutputs| o.elastic_j + o.contact_j;
-        let stored_before = if torques != s.torques_nm { Some(stored(&self.condensed_outputs(qs, s)?)) } else { None };
+        let stored_before = match (torques != s.torques_nm, stored_j) {
+            (false, _) => None,
+            (true, Some(u)) => Some(u),
+            (true, None) => Some(stored(&self.condensed_outputs(qs, s)?)),
+        };
         let y = self.pack(s);
         let first = self.condensed_rhs(qs, &y, s.anchor, torques)?;
         self.condensed_unpack(qs, &y, s);
