@@ -6,4 +6,4 @@ bash scripts/setup.sh
 # The workspace build produces the FMU binary (target/release/libgearfmu.so) that fmu-build packs.
 cargo build --release --workspace --all-targets
 cargo test --release --workspace
-.venv/bin/python -m pytest tests/python -q
+.venv/bin/python -m pytest tests/python -q --durations=25
