@@ -304,11 +304,17 @@ impl<'a> PmorDynamics<'a> {
             trial[k] = q0[k] + h * v0[k] + 0.5 * h * h * a_bar;
             trial[n_q + k] = v0[k] + h * a_bar;
         }
-        let newton = self.discrete_gradient_matrix(qs, h);
+        let mut newton = self.discrete_gradient_matrix(qs, h);
         let mut residual = nalgebra::DVector::zeros(n_q);
         let mut converged = None;
-        for _ in 0..DISCRETE_GRADIENT_ITERATIONS {
+        for iteration in 0..DISCRETE_GRADIENT_ITERATIONS {
             let Ok((next, end)) = self.rhs(&trial, anchor, torques) else { break };
+            if iteration == 0 {
+                // The mesh's stiffness at the predictor joins the bodies' for this step.
+                if let Some(with_mesh) = self.discrete_gradient_matrix_with_mesh(qs, h) {
+                    newton = Some(with_mesh);
+                }
+            }
             let m_a1 = mass(&next[n_q..2 * n_q]);
             let dq: Vec<f64> = (0..n_q).map(|k| trial[k] - q0[k]).collect();
             let norm2 = dot(&dq, &mass(&dq));
@@ -371,11 +377,41 @@ impl<'a> PmorDynamics<'a> {
         Ok(())
     }
 
-    /// (I + h²/4·A)⁻¹, A = −∂a/∂q of the slow coordinates' bodies (`GearSplit::slow_body_stiffness`;
-    /// zero on the angles): the Jacobian of the trapezoid's positions, frozen. Exact for the
-    /// body modes, which are linear and set Newton's rate without it ((ωh)²/4, up to 0.3 at
-    /// the cut-off); the contact's stiffness is left to the iteration ((ωh)²/4 ≈ 0.05 at the
-    /// mesh mode). Made once per step length and kept.
+    /// (I + h²/4·(A + A_c))⁻¹ with the mesh's stiffness A_c at the last solve
+    /// (`slow_contact_acceleration_stiffness`) beside the bodies' A: Newton's matrix for one step,
+    /// made at its predictor. `None` where there is no contact (the bodies' alone then serves).
+    fn discrete_gradient_matrix_with_mesh(
+        &self,
+        qs: &super::quasi_static::QuasiStatic,
+        h: f64,
+    ) -> Option<nalgebra::DMatrix<f64>> {
+        let a = self.slow_contact_acceleration_stiffness(qs)? + self.slow_body_acceleration_stiffness(qs);
+        let n = a.nrows();
+        (nalgebra::DMatrix::identity(n, n) + a * (0.25 * h * h)).try_inverse()
+    }
+
+    /// A = −∂a/∂q of the slow coordinates' bodies (`GearSplit::slow_body_stiffness`; zero on the
+    /// angles), made once per condensation.
+    fn slow_body_acceleration_stiffness(&self, qs: &super::quasi_static::QuasiStatic) -> nalgebra::DMatrix<f64> {
+        qs.body_acceleration_stiffness
+            .get_or_init(|| {
+                let l = self.layout();
+                let n = l.n_q[0] + l.n_q[1];
+                let mut a = nalgebra::DMatrix::zeros(n, n);
+                for i in 0..2 {
+                    let k = qs.splits[i].slow_body_stiffness(&self.model.gears[i].eigenvalues);
+                    let q = l.q(i) + 1;
+                    a.view_mut((q, q), (k.nrows(), k.ncols())).copy_from(&k);
+                }
+                a
+            })
+            .clone()
+    }
+
+    /// (I + h²/4·A)⁻¹, A = −∂a/∂q of the slow coordinates' bodies (`slow_body_acceleration_stiffness`):
+    /// the Jacobian of the trapezoid's positions, frozen. Exact for the body modes, which are
+    /// linear; where the teeth touch, each step replaces it with `discrete_gradient_matrix_with_mesh`
+    /// at its predictor. Made once per step length and kept.
     fn discrete_gradient_matrix(
         &self,
         qs: &super::quasi_static::QuasiStatic,
@@ -386,14 +422,8 @@ impl<'a> PmorDynamics<'a> {
                 return Some(p.clone());
             }
         }
-        let l = self.layout();
-        let n = l.n_q[0] + l.n_q[1];
-        let mut a = nalgebra::DMatrix::zeros(n, n);
-        for i in 0..2 {
-            let k = qs.splits[i].slow_body_stiffness(&self.model.gears[i].eigenvalues);
-            let q = l.q(i) + 1;
-            a.view_mut((q, q), (k.nrows(), k.ncols())).copy_from(&k);
-        }
+        let a = self.slow_body_acceleration_stiffness(qs);
+        let n = a.nrows();
         let p = (nalgebra::DMatrix::identity(n, n) + a * (0.25 * h * h)).try_inverse()?;
         *qs.iteration_matrix.borrow_mut() = Some((h, p.clone()));
         Some(p)

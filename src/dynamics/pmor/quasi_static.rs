@@ -349,6 +349,8 @@ pub struct QuasiStatic {
     pub(super) stepping: std::cell::Cell<bool>,
     /// (h, (I + h²/4·A)⁻¹): the discrete-gradient iteration's matrix at the step it was made for.
     pub(super) iteration_matrix: RefCell<Option<(f64, DMatrix<f64>)>>,
+    /// −∂a/∂q of the slow coordinates' bodies, assembled once (`discrete_gradient_matrix`).
+    pub(super) body_acceleration_stiffness: std::cell::OnceCell<DMatrix<f64>>,
 }
 
 impl QuasiStatic {
@@ -380,6 +382,7 @@ impl QuasiStatic {
             counts: Default::default(),
             stepping: Default::default(),
             iteration_matrix: RefCell::new(None),
+            body_acceleration_stiffness: std::cell::OnceCell::new(),
         }
     }
 }
@@ -935,6 +938,61 @@ impl<'a> PmorDynamics<'a> {
         }
         e.dissipation_w += power;
         Ok(())
+    }
+
+    /// The contact's stiffness on the slow coordinates at the last solve, as accelerations
+    /// (M⁻¹·A_c, n_q × n_q; `None` before a solve or without contact). With the fast coordinates
+    /// at their equilibrium, the approach of section s is α_s = r_s·y + g_s·z and the fast tangent
+    /// K_f = D + Σ k_s g_s g_sᵀ, so dz/dy = −K_f⁻¹ Σ k_t g_t r_tᵀ and the condensed stiffness is the
+    /// Schur complement A_c = Σ k_s r_s r_sᵀ − Σ_s Σ_t k_s k_t (g_sᵀK_f⁻¹g_t) r_s r_tᵀ. What the
+    /// discrete gradient's Newton matrix needs of the mesh (issue 39: with the bodies' stiffness
+    /// alone it converged at (ωh)²/4 per iteration on the mesh mode, four solves a step).
+    pub(super) fn slow_contact_acceleration_stiffness(&self, qs: &QuasiStatic) -> Option<DMatrix<f64>> {
+        let p = qs.prediction.borrow();
+        let p = p.as_ref()?;
+        if p.stiffness.is_empty() {
+            return None;
+        }
+        let l = self.layout();
+        let n_q = l.n_q[0] + l.n_q[1];
+        let w: Vec<DVector<f64>> = p
+            .fast_rows
+            .iter()
+            .map(|g| p.tangent.solve(g, &p.fast_rows, &p.stiffness))
+            .collect::<Result<_, _>>()
+            .ok()?;
+        let mut a = DMatrix::zeros(n_q, n_q);
+        for (s, (r_s, k_s)) in p.slow_rows.iter().zip(&p.stiffness).enumerate() {
+            // Row s of the Schur complement's coupling: k_s·r_s·(r_s − Σ_t k_t (g_sᵀw_t) r_t)ᵀ.
+            let mut column = DVector::from_column_slice(r_s);
+            for (t, (r_t, k_t)) in p.slow_rows.iter().zip(&p.stiffness).enumerate() {
+                let c = k_t * p.fast_rows[s].dot(&w[t]);
+                column.iter_mut().zip(r_t).for_each(|(x, r)| *x -= c * r);
+            }
+            for i in 0..n_q {
+                let f = k_s * r_s[i];
+                if f != 0.0 {
+                    for j in 0..n_q {
+                        a[(i, j)] += f * column[j];
+                    }
+                }
+            }
+        }
+        // M⁻¹ on the rows: per gear θ by J, ξ by M_ξ.
+        for i in 0..2 {
+            let sp = &qs.splits[i];
+            let q = l.q(i);
+            let n = l.n_q[i];
+            for j in 0..n_q {
+                a[(q, j)] /= sp.inertia_kgm2;
+                let mut xi = DVector::from_iterator(n - 1, (1..n).map(|r| a[(q + r, j)]));
+                sp.xi_acceleration(&mut xi);
+                for r in 1..n {
+                    a[(q + r, j)] = xi[r - 1];
+                }
+            }
+        }
+        a.iter().all(|x| x.is_finite()).then_some(a)
     }
 
     /// Keeps the solution's linearization for the next solve's start (`Prediction`).
