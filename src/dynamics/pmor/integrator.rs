@@ -340,8 +340,11 @@ impl<'a> PmorDynamics<'a> {
                 converged = Some((next, end, dq));
                 break;
             }
+            // The velocity that goes with the shifted positions (q̇₁ = 2(q₁ − q₀)/h − q̇₀): the
+            // damping forces of the next evaluation see it, as Newton's matrix assumes.
             for k in 0..n_q {
                 trial[k] += shift[k];
+                trial[n_q + k] = 2.0 * (trial[k] - q0[k]) / h - v0[k];
             }
         }
         let Some((mut next, end, dq)) = converged else {
@@ -377,41 +380,67 @@ impl<'a> PmorDynamics<'a> {
         Ok(())
     }
 
-    /// (I + h²/4·(A + A_c))⁻¹ with the mesh's stiffness A_c at the last solve
-    /// (`slow_contact_acceleration_stiffness`) beside the bodies' A: Newton's matrix for one step,
-    /// made at its predictor. `None` where there is no contact (the bodies' alone then serves).
+    /// (I + h/2·(D + D_c) + h²/4·(A + A_c))⁻¹ with the mesh's stiffness A_c and damper D_c at the
+    /// last solve (`slow_contact_acceleration_stiffness`, `slow_mesh_damper_acceleration`) beside
+    /// the bodies' A and D: Newton's matrix for one step, made at its predictor. `None` where there
+    /// is no contact (the bodies' alone then serves).
     fn discrete_gradient_matrix_with_mesh(
         &self,
         qs: &super::quasi_static::QuasiStatic,
         h: f64,
     ) -> Option<nalgebra::DMatrix<f64>> {
-        let a = self.slow_contact_acceleration_stiffness(qs)? + self.slow_body_acceleration_stiffness(qs);
+        let mut a = self.slow_contact_acceleration_stiffness(qs)? + self.slow_body_acceleration_stiffness(qs);
+        a *= 0.25 * h * h;
+        let mut d = self.slow_body_acceleration_damping(qs);
+        if let Some(mesh) = self.slow_mesh_damper_acceleration(qs) {
+            d += mesh;
+        }
+        a += d * (0.5 * h);
         let n = a.nrows();
-        (nalgebra::DMatrix::identity(n, n) + a * (0.25 * h * h)).try_inverse()
+        (nalgebra::DMatrix::identity(n, n) + a).try_inverse()
     }
 
     /// A = −∂a/∂q of the slow coordinates' bodies (`GearSplit::slow_body_stiffness`; zero on the
     /// angles), made once per condensation.
     fn slow_body_acceleration_stiffness(&self, qs: &super::quasi_static::QuasiStatic) -> nalgebra::DMatrix<f64> {
-        qs.body_acceleration_stiffness
-            .get_or_init(|| {
-                let l = self.layout();
-                let n = l.n_q[0] + l.n_q[1];
-                let mut a = nalgebra::DMatrix::zeros(n, n);
-                for i in 0..2 {
-                    let k = qs.splits[i].slow_body_stiffness(&self.model.gears[i].eigenvalues);
-                    let q = l.q(i) + 1;
-                    a.view_mut((q, q), (k.nrows(), k.ncols())).copy_from(&k);
-                }
-                a
-            })
-            .clone()
+        self.slow_body_block(&qs.body_acceleration_stiffness, |i| {
+            qs.splits[i].slow_body_stiffness(&self.model.gears[i].eigenvalues)
+        })
     }
 
-    /// (I + h²/4·A)⁻¹, A = −∂a/∂q of the slow coordinates' bodies (`slow_body_acceleration_stiffness`):
-    /// the Jacobian of the trapezoid's positions, frozen. Exact for the body modes, which are
-    /// linear; where the teeth touch, each step replaces it with `discrete_gradient_matrix_with_mesh`
-    /// at its predictor. Made once per step length and kept.
+    /// D = −∂a/∂q̇ of the slow coordinates' bodies' modal damping (`GearSplit::slow_body_damping`;
+    /// zero on the angles), made once per condensation.
+    fn slow_body_acceleration_damping(&self, qs: &super::quasi_static::QuasiStatic) -> nalgebra::DMatrix<f64> {
+        self.slow_body_block(&qs.body_acceleration_damping, |i| {
+            qs.splits[i].slow_body_damping(&self.model.gears[i].eigenvalues, self.damping[i].modes_ratio)
+        })
+    }
+
+    /// The n_q × n_q matrix with each gear's ξ block from `block`, kept in `cell`.
+    fn slow_body_block(
+        &self,
+        cell: &std::cell::OnceCell<nalgebra::DMatrix<f64>>,
+        block: impl Fn(usize) -> nalgebra::DMatrix<f64>,
+    ) -> nalgebra::DMatrix<f64> {
+        cell.get_or_init(|| {
+            let l = self.layout();
+            let n = l.n_q[0] + l.n_q[1];
+            let mut a = nalgebra::DMatrix::zeros(n, n);
+            for i in 0..2 {
+                let k = block(i);
+                let q = l.q(i) + 1;
+                a.view_mut((q, q), (k.nrows(), k.ncols())).copy_from(&k);
+            }
+            a
+        })
+        .clone()
+    }
+
+    /// (I + h/2·D + h²/4·A)⁻¹ with A = −∂a/∂q and D = −∂a/∂q̇ of the slow coordinates' bodies
+    /// (`slow_body_acceleration_stiffness`, `slow_body_acceleration_damping`): the Jacobian of the
+    /// trapezoid's positions, with q̇₁ = 2(q₁ − q₀)/h − q̇₀, frozen. Exact for the body modes,
+    /// which are linear; where the teeth touch, each step replaces it with
+    /// `discrete_gradient_matrix_with_mesh` at its predictor. Made once per step length and kept.
     fn discrete_gradient_matrix(
         &self,
         qs: &super::quasi_static::QuasiStatic,
@@ -422,9 +451,10 @@ impl<'a> PmorDynamics<'a> {
                 return Some(p.clone());
             }
         }
-        let a = self.slow_body_acceleration_stiffness(qs);
+        let a = self.slow_body_acceleration_stiffness(qs) * (0.25 * h * h)
+            + self.slow_body_acceleration_damping(qs) * (0.5 * h);
         let n = a.nrows();
-        let p = (nalgebra::DMatrix::identity(n, n) + a * (0.25 * h * h)).try_inverse()?;
+        let p = (nalgebra::DMatrix::identity(n, n) + a).try_inverse()?;
         *qs.iteration_matrix.borrow_mut() = Some((h, p.clone()));
         Some(p)
     }
