@@ -896,8 +896,10 @@ impl Model for GearPairFmu {
                 let mut state = s.pmor.clone().ok_or("the PMOR-Hertz state is not initialized")?;
                 let dynamics = self.pmor(model, place, s);
                 let stored_j = s.pmor_outputs.map(|o| o.stored_j);
-                dynamics.advance_knowing(&mut state, s.torques_nm, h, s.max_step_s, stored_j)?;
-                let end = dynamics.outputs(&state)?;
+                let end = match dynamics.advance_knowing(&mut state, s.torques_nm, h, s.max_step_s, stored_j)? {
+                    Some(end) => end,
+                    None => dynamics.outputs(&state)?,
+                };
                 // The work integrals start at zero (`PmorModel::initial_state`).
                 energy_balance([s.start_energy_j, end.total_energy_j()], [state.input_work_j, state.dissipated_j])?;
                 s.pmor = Some(state);

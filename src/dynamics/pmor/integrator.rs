@@ -211,11 +211,14 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
     ) -> Result<usize, String> {
-        self.discrete_gradient_advance_from(s, torques, duration, max_step, None)
+        self.discrete_gradient_advance_from(s, torques, duration, max_step, None).map(|(solves, _)| solves)
     }
 
     /// `discrete_gradient_advance` from the right-hand side at `s` where the caller has it
-    /// already (the settling to new torques evaluates it).
+    /// already (the settling to new torques evaluates it). Returns the solves and the outputs of
+    /// the last evaluation: those of the end state, the potential the step booked (evaluated at
+    /// the last Newton iterate's velocity, which the accepted one matches to the step's
+    /// convergence).
     pub(super) fn discrete_gradient_advance_from(
         &self,
         s: &mut PmorState,
@@ -223,7 +226,7 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
         first: Option<(Vec<f64>, super::PmorOutputs)>,
-    ) -> Result<usize, String> {
+    ) -> Result<(usize, super::PmorOutputs), String> {
         let qs = self.condensed().ok_or("the discrete-gradient step needs the quasi-static condensation")?;
         let (n, h) = super::substeps(duration, max_step);
         let solves_before = qs.counts.get().1;
@@ -237,7 +240,7 @@ impl<'a> PmorDynamics<'a> {
             self.discrete_gradient_step(qs, s, &mut y, &mut start, torques, h, 0)?;
             self.end_discrete_gradient_step(s, &mut y, &mut start, torques)?;
         }
-        Ok(qs.counts.get().1 - solves_before)
+        Ok((qs.counts.get().1 - solves_before, start.outputs))
     }
 
     /// After an accepted step: the state at y, each anchor moved to the pitch that holds its
@@ -304,16 +307,16 @@ impl<'a> PmorDynamics<'a> {
             trial[k] = q0[k] + h * v0[k] + 0.5 * h * h * a_bar;
             trial[n_q + k] = v0[k] + h * a_bar;
         }
-        let mut newton = self.discrete_gradient_matrix(qs, h);
+        // Newton's matrix, made at the first iterate (the mesh's stiffness at the predictor).
+        let mut newton = None;
         let mut residual = nalgebra::DVector::zeros(n_q);
         let mut converged = None;
         for iteration in 0..DISCRETE_GRADIENT_ITERATIONS {
             let Ok((next, end)) = self.rhs(&trial, anchor, torques) else { break };
             if iteration == 0 {
-                // The mesh's stiffness at the predictor joins the bodies' for this step.
-                if let Some(with_mesh) = self.discrete_gradient_matrix_with_mesh(qs, h) {
-                    newton = Some(with_mesh);
-                }
+                // The mesh's stiffness and damper at the predictor join the bodies' for this
+                // step; out of contact the bodies' alone, kept per step length.
+                newton = self.discrete_gradient_matrix_with_mesh(qs, h).or_else(|| self.discrete_gradient_matrix(qs, h));
             }
             let m_a1 = mass(&next[n_q..2 * n_q]);
             let dq: Vec<f64> = (0..n_q).map(|k| trial[k] - q0[k]).collect();
@@ -404,7 +407,7 @@ impl<'a> PmorDynamics<'a> {
     /// angles), made once per condensation.
     fn slow_body_acceleration_stiffness(&self, qs: &super::quasi_static::QuasiStatic) -> nalgebra::DMatrix<f64> {
         self.slow_body_block(&qs.body_acceleration_stiffness, |i| {
-            qs.splits[i].slow_body_stiffness(&self.model.gears[i].eigenvalues)
+            qs.splits[i].slow_body_stiffness().clone()
         })
     }
 
@@ -412,7 +415,7 @@ impl<'a> PmorDynamics<'a> {
     /// zero on the angles), made once per condensation.
     fn slow_body_acceleration_damping(&self, qs: &super::quasi_static::QuasiStatic) -> nalgebra::DMatrix<f64> {
         self.slow_body_block(&qs.body_acceleration_damping, |i| {
-            qs.splits[i].slow_body_damping(&self.model.gears[i].eigenvalues, self.damping[i].modes_ratio)
+            qs.splits[i].slow_body_damping(self.damping[i].modes_ratio)
         })
     }
 

@@ -549,12 +549,14 @@ impl<'a> PmorDynamics<'a> {
     /// and an eighth of the step: what a smaller step would complete, completes. What fails
     /// then is reported with both messages.
     pub fn advance(&self, s: &mut PmorState, torques: [f64; 2], duration: f64, max_step: f64) -> Result<(), String> {
-        self.advance_knowing(s, torques, duration, max_step, None)
+        self.advance_knowing(s, torques, duration, max_step, None).map(|_| ())
     }
 
     /// `advance` where the caller knows the elastic and contact energy at `s` (J; what
     /// `outputs(s)` returns as `elastic_j + contact_j`): the settling to new torques books its
-    /// work against it instead of evaluating the state again.
+    /// work against it instead of evaluating the state again. Returns the outputs at the end
+    /// state where the integrator has them (the discrete gradient's last evaluation), so that a
+    /// caller who needs them does not evaluate the state again; `None` otherwise.
     pub fn advance_knowing(
         &self,
         s: &mut PmorState,
@@ -562,7 +564,7 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
         stored_j: Option<f64>,
-    ) -> Result<(), String> {
+    ) -> Result<Option<PmorOutputs>, String> {
         let max_step = max_step.min(self.angular_step_bound_s(s));
         let call_start = s.clone();
         self.advance_at(s, torques, duration, max_step, stored_j).or_else(|first| {
@@ -587,23 +589,23 @@ impl<'a> PmorDynamics<'a> {
         duration: f64,
         max_step: f64,
         stored_j: Option<f64>,
-    ) -> Result<(), String> {
+    ) -> Result<Option<PmorOutputs>, String> {
         // The settling to the new torques is a time step's solve too (its tolerance, its start
         // from the last solve's tangent): a master changes the torques at every call.
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(true);
         }
         let result = self.settle_knowing(s, torques, stored_j).and_then(|first| match self.integrator {
-            Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step),
-            Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first),
+            Integrator::Rk4 => self.rk4_advance(s, torques, duration, max_step).map(|_| None),
+            Integrator::Verlet => self.verlet_advance_from(s, torques, duration, max_step, first).map(|_| None),
             // The discrete gradient needs the condensation's constant slow mass; the full pair
             // (`Condensation::None`, with its θ-dependent mass) steps with Verlet, its step rule.
             Integrator::DiscreteGradient if self.quasi_static.is_none() => {
-                self.verlet_advance_from(s, torques, duration, max_step, first)
+                self.verlet_advance_from(s, torques, duration, max_step, first).map(|_| None)
             }
-            Integrator::DiscreteGradient => {
-                self.discrete_gradient_advance_from(s, torques, duration, max_step, first).map(|_| ())
-            }
+            Integrator::DiscreteGradient => self
+                .discrete_gradient_advance_from(s, torques, duration, max_step, first)
+                .map(|(_, outputs)| Some(outputs)),
         });
         if let Some(qs) = &self.quasi_static {
             qs.stepping.set(false);

@@ -167,6 +167,11 @@ pub struct GearSplit {
     /// Whether that mass is the identity to round-off (Φ mass-normalized: measured ≤ 1e-14 on
     /// the example pairs), so the accelerations are the forces themselves.
     xi_mass_is_unit: bool,
+    /// The slow body coordinates' stiffness and modal-damping root as accelerations
+    /// (`slow_body_stiffness`, `slow_body_damping`), made with the split: the discrete
+    /// gradient's Newton matrix reads them at every doStep.
+    slow_body_acceleration_stiffness: DMatrix<f64>,
+    slow_body_acceleration_damping_root: DMatrix<f64>,
     /// The hub mode's free frequency (Hz) among the retained modes, the choice was made on.
     pub hub_frequency_hz: f64,
     /// The cut-off (Hz) and the body modes above it.
@@ -235,7 +240,22 @@ impl GearSplit {
         let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
         let n_x = xi_mass.nrows();
         let xi_mass_is_unit = (&xi_mass - DMatrix::identity(n_x, n_x)).amax() < 1e-12;
+        let slow_body_acceleration_stiffness = {
+            let mut k = basis.transpose() * &lambda * &basis;
+            if fast_basis.ncols() > 0 {
+                let kqf = basis.transpose() * &lambda * &fast_basis;
+                let kff = fast_basis.transpose() * &lambda * &fast_basis;
+                if let Some(inverse) = kff.try_inverse() {
+                    k -= &kqf * inverse * kqf.transpose();
+                }
+            }
+            xi_mass_factor.solve(&k)
+        };
+        let root = DMatrix::from_diagonal(&DVector::from_iterator(n_k, gear.eigenvalues.iter().map(|l| l.sqrt())));
+        let slow_body_acceleration_damping_root = xi_mass_factor.solve(&(basis.transpose() * root * &basis));
         Ok(GearSplit {
+            slow_body_acceleration_stiffness,
+            slow_body_acceleration_damping_root,
             hub,
             b,
             inertia_kgm2: inertia,
@@ -263,30 +283,16 @@ impl GearSplit {
     /// times QᵀΛQ − QᵀΛF(FᵀΛF)⁻¹FᵀΛQ (the fast body coordinates at their equilibrium; the
     /// contact and the torque left out). The discrete-gradient step's Newton matrix is made of
     /// it: exact for the bodies, which are linear.
-    pub fn slow_body_stiffness(&self, eigenvalues: &[f64]) -> DMatrix<f64> {
-        let lambda = DMatrix::from_diagonal(&DVector::from_column_slice(eigenvalues));
-        let (q, f) = (&self.basis, &self.fast_basis);
-        let mut k = q.transpose() * &lambda * q;
-        if f.ncols() > 0 {
-            let kqf = q.transpose() * &lambda * f;
-            let kff = f.transpose() * &lambda * f;
-            if let Some(inverse) = kff.try_inverse() {
-                k -= &kqf * inverse * kqf.transpose();
-            }
-        }
-        self.xi_mass_factor.solve(&k)
+    pub fn slow_body_stiffness(&self) -> &DMatrix<f64> {
+        &self.slow_body_acceleration_stiffness
     }
 
-    /// The slow body coordinates' modal damping, mass-normalized: M_ξ⁻¹·Qᵀ·diag(2ζ√λ)·Q (the
-    /// damping force of η̇_Φ = Q·ξ̇, as `PmorDynamics::evaluate` applies it). With the stiffness,
-    /// what the discrete gradient's Newton matrix needs of the bodies.
-    pub fn slow_body_damping(&self, eigenvalues: &[f64], ratio: f64) -> DMatrix<f64> {
-        let q = &self.basis;
-        let c = DMatrix::from_diagonal(&DVector::from_iterator(
-            eigenvalues.len(),
-            eigenvalues.iter().map(|l| 2.0 * ratio * l.sqrt()),
-        ));
-        self.xi_mass_factor.solve(&(q.transpose() * c * q))
+    /// The slow body coordinates' modal damping at ratio ζ, mass-normalized:
+    /// M_ξ⁻¹·Qᵀ·diag(2ζ√λ)·Q (the damping force of η̇_Φ = Q·ξ̇, as `PmorDynamics::evaluate`
+    /// applies it). With the stiffness, what the discrete gradient's Newton matrix needs of the
+    /// bodies.
+    pub fn slow_body_damping(&self, ratio: f64) -> DMatrix<f64> {
+        &self.slow_body_acceleration_damping_root * (2.0 * ratio)
     }
 
     /// η += Q·ξ (n_k).
@@ -693,13 +699,18 @@ impl<'a> PmorDynamics<'a> {
         })
     }
 
-    /// The slow accelerations as they follow a Newton step Δz of the fast coordinates, to first
-    /// order: Δf = −Σ_s k_s·(g_s·Δz)·r_s over the loaded sections (r_s the section's row in
+    /// The slow accelerations and the mesh force as they follow a Newton step Δz of the fast
+    /// coordinates, to first order: Δf = −Σ_s k_s·(g_s·Δz)·r_s over the loaded sections (r_s the section's row in
     /// (θ, η_Φ), mapped to (φ, ξ) as every force is), the fast body coordinates' −QᵀΛF·Δz_Φ on ξ, and
     /// −(K′_Ψη_Ψ)·Δη_Ψ on φ.
     fn shift_slow_forces(&self, qs: &QuasiStatic, e: &mut Evaluation, dz: &DVector<f64>) {
         let l = self.layout();
         let n_z0 = qs.fast.borrow()[0].len();
+        // The mesh force output follows too (each section's force by k_s·(g_s·Δz)): the step
+        // hands its last evaluation to the FMU's outputs (`PmorDynamics::advance_knowing`).
+        for (section, row) in e.outputs.contact.sections.iter().zip(&e.fast_rows) {
+            e.outputs.contact.normal_force_n += section.flank_sign * section.stiffness_n_per_m * row.dot(dz);
+        }
         for i in 0..2 {
             let g = &self.model.gears[i];
             let sp = &qs.splits[i];
