@@ -175,12 +175,41 @@ const DISCRETE_GRADIENT_ENERGY: f64 = 1e-7;
 /// solve stops at a Newton decrement of `quasi_static::STEP_RELATIVE_DECREMENT` (1e-6) of it.
 const DISCRETE_GRADIENT_NOISE: f64 = 1e-6;
 
-/// One step's start: the slow state y, its ẏ and outputs, and the acceleration of the step
+/// One step's start: the slow state y, its ẏ and outputs, and the accelerations of the steps
 /// before (the predictor's).
 struct StepStart {
     dy: Vec<f64>,
     outputs: super::PmorOutputs,
-    previous_acceleration: Option<Vec<f64>>,
+    history: AccelerationHistory,
+}
+
+/// The slow accelerations at the starts of the last two steps of a call, most recent first,
+/// each with the length of the step that followed it.
+#[derive(Default)]
+struct AccelerationHistory(Vec<(Vec<f64>, f64)>);
+
+impl AccelerationHistory {
+    fn push(&mut self, acceleration: Vec<f64>, step_s: f64) {
+        self.0.insert(0, (acceleration, step_s));
+        self.0.truncate(2);
+    }
+
+    /// The acceleration at the end of a step of length h from a₀, extrapolated: the polynomial
+    /// through a₀ and the (up to two) accelerations before it, at their times (Lagrange, the
+    /// steps need not be equal: a halved step follows a whole one).
+    fn extrapolate(&self, a0: f64, k: usize, h: f64) -> f64 {
+        match self.0.as_slice() {
+            [] => a0,
+            [(a1, d1)] => a0 + (a0 - a1[k]) * h / d1,
+            [(a1, d1), (a2, d2), ..] => {
+                let (t1, t2) = (-d1, -d1 - d2);
+                let l0 = (h - t1) * (h - t2) / (t1 * t2);
+                let l1 = h * (h - t2) / (t1 * (t1 - t2));
+                let l2 = h * (h - t1) / (t2 * (t2 - t1));
+                l0 * a0 + l1 * a1[k] + l2 * a2[k]
+            }
+        }
+    }
 }
 
 impl<'a> PmorDynamics<'a> {
@@ -235,7 +264,7 @@ impl<'a> PmorDynamics<'a> {
             Some(f) => f,
             None => self.rhs(&y, s.anchor, torques)?,
         };
-        let mut start = StepStart { dy, outputs, previous_acceleration: None };
+        let mut start = StepStart { dy, outputs, history: AccelerationHistory::default() };
         for _ in 0..n {
             self.discrete_gradient_step(qs, s, &mut y, &mut start, torques, h, 0)?;
             self.end_discrete_gradient_step(s, &mut y, &mut start, torques)?;
@@ -263,7 +292,7 @@ impl<'a> PmorDynamics<'a> {
             let len = y.len();
             y[len - 2] +=
                 torques[0] * (outputs.bore_theta[0] - before[0]) + torques[1] * (outputs.bore_theta[1] - before[1]);
-            *start = StepStart { dy, outputs, previous_acceleration: start.previous_acceleration.take() };
+            *start = StepStart { dy, outputs, history: std::mem::take(&mut start.history) };
         }
         Ok(())
     }
@@ -298,11 +327,11 @@ impl<'a> PmorDynamics<'a> {
         let (q0, v0, a0) = (&y[..n_q], &y[n_q..2 * n_q], &start.dy[n_q..2 * n_q]);
         let m_a0 = mass(a0);
         let v_0 = potential(&start.outputs);
-        // The start: the trapezoid with the end acceleration extrapolated from the last two
+        // The start: the trapezoid with the end acceleration extrapolated from the last three
         // (velocity Verlet's prediction on a call's first step).
         let mut trial = y.clone();
         for k in 0..n_q {
-            let a1 = start.previous_acceleration.as_ref().map_or(a0[k], |p| 2.0 * a0[k] - p[k]);
+            let a1 = start.history.extrapolate(a0[k], k, h);
             let a_bar = 0.5 * (a0[k] + a1);
             trial[k] = q0[k] + h * v0[k] + 0.5 * h * h * a_bar;
             trial[n_q + k] = v0[k] + h * a_bar;
@@ -378,7 +407,7 @@ impl<'a> PmorDynamics<'a> {
         // ẏ's positions part is the velocity: the accepted one.
         next[..n_q].copy_from_slice(&y[n_q..2 * n_q]);
         let previous = std::mem::replace(&mut start.dy, next);
-        start.previous_acceleration = Some(previous[n_q..2 * n_q].to_vec());
+        start.history.push(previous[n_q..2 * n_q].to_vec(), h);
         start.outputs = end;
         Ok(())
     }
