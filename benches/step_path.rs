@@ -48,9 +48,8 @@ struct Unpacked {
 }
 
 fn unpack(fmu: &Path) -> Result<Unpacked, String> {
-    let mut archive =
-        zip::ZipArchive::new(std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?)
-            .map_err(|e| e.to_string())?;
+    let mut archive = zip::ZipArchive::new(std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?)
+        .map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
     std::io::Read::read_to_end(
         &mut archive.by_name(&format!("resources/{FILE_NAME}")).map_err(|e| e.to_string())?,
@@ -160,7 +159,8 @@ fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64) -> Result<Run, Stri
             let own_w2 = dynamics.port(1, &s)?.1;
             run.steps += (h / dynamics.angular_step_bound_s(&s).min(model.max_step_s) - 1e-9).ceil();
             let tick = Instant::now();
-            let end = dynamics.advance_knowing(&mut s, [pair.torque_1_nm, -brake * own_w2], h, model.max_step_s, stored_j)?;
+            let end =
+                dynamics.advance_knowing(&mut s, [pair.torque_1_nm, -brake * own_w2], h, model.max_step_s, stored_j)?;
             run.integration_alone.push(tick.elapsed().as_secs_f64() * 1e6);
             stored_j = end.map(|o| o.elastic_j + o.contact_j);
         }
@@ -211,7 +211,14 @@ fn main() {
                         .collect(),
                 );
                 let last = &runs[runs.len() - 1];
-                (all(|r| &r.through_the_api), all(|r| &r.integration_alone), differences, last.steps, last.solves, last.evaluations)
+                (
+                    all(|r| &r.through_the_api),
+                    all(|r| &r.integration_alone),
+                    differences,
+                    last.steps,
+                    last.solves,
+                    last.evaluations,
+                )
             });
             match row {
                 Ok((api, alone, overhead, substeps, solves, evaluations)) => println!(
