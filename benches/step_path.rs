@@ -1,27 +1,28 @@
 //! What one PMOR-Hertz doStep costs at operating speed, and what of it is the integration
 //! (issue 39), measured in release mode:
 //!
-//!     cargo bench --bench step_path [-- FMU ...]     (default: out/KurokawaSpur.fmu out/SmallHelical.fmu)
+//!     cargo bench --bench step_path [-- FMU ... [--torque-nm=T]]
 //!
-//! The case is issue 38's brake case: both gears start at synchronous speed, gear 1 carries
-//! the pair's operating torque T₁ (185 N·m on the Kurokawa spur pair, 142 on the small helical), gear 2 a viscous brake fed back from ω₂ after each communication step, 20 ms.
-//! It runs twice on each FMU's model, in this process:
+//! (default: out/KurokawaSpur.fmu out/SmallHelical.fmu). The case is issue 38's brake case: both
+//! gears start at synchronous speed, gear 1 carries T₁ (`--torque-nm`, else the pair's operating
+//! torque: 250 N·m on the Kurokawa spur pair, 201.7 on the small helical), gear 2 a viscous
+//! brake fed back from ω₂ after each communication step; 20 ms. It runs two ways in lockstep:
 //!
 //! - **through the FMI C entry points** (`fmi2SetReal` of the torques, `fmi2DoStep`, `fmi2GetReal`
 //!   of ω₂, as a master calls them; only `fmi2DoStep` is timed), the FMU's own step path;
 //! - **the integration alone**: `PmorDynamics::advance_knowing` on one dynamics object kept
-//!   across the calls, the same inputs, the stored energy handed on as the FMU hands it — the
-//!   baseline. It also counts the quasi-static solves (one per
-//!   right-hand side of the condensed pair) and the contact evaluations.
+//!   across the calls, the same inputs, the stored energy handed on as the FMU hands it: the
+//!   baseline. It also counts the quasi-static solves (one per right-hand side of the condensed
+//!   pair) and the contact evaluations.
 //!
-//! Each is run five times, alternating, and the median doStep of all five is reported (what
-//! the machine's other load moves least). Reported per case: µs per doStep (median), µs per advance (median), their difference (the per-doStep overhead:
-//! what a doStep costs beyond its integration), internal steps per doStep, solves and
-//! evaluations per doStep, µs per solve and per evaluation (the advance's time over its counts),
-//! and the real-time factor of each. The cases at 0.5 kHz and 20 µs are one internal step per
-//! doStep on the Kurokawa spur pair: the overhead asked to stay under 10 µs is read there.
-//! Each FMU must have been built (`./scripts/demo.sh` builds the spur one; the helical one with
-//! `cargo run --release -p fmu-build -- build examples/small_helical.toml --out out/SmallHelical.fmu`).
+//! Five runs per case. Reported: the medians over all their doSteps of µs per doStep and per
+//! advance, the median of the paired differences (the per-doStep overhead: what a doStep costs
+//! beyond its integration), internal steps, solves and evaluations per doStep, µs per solve and
+//! per evaluation (the advance's time over its counts), and the real-time factor. The case at
+//! 0.5 kHz and 20 µs is one internal step per doStep on the Kurokawa spur pair: the overhead
+//! asked to stay under 10 µs is read there. Each FMU must have been built (`./scripts/demo.sh`
+//! builds the spur one; the helical one: `./target/release/fmu-build build
+//! examples/small_helical.toml -o out/SmallHelical.fmu`).
 use fmi_sys::fmi2::*;
 use gearfmu::dynamics::pmor::PmorDynamics;
 use gearfmu::fmi2::exports::*;
@@ -176,10 +177,14 @@ fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64) -> Result<Run, Stri
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut fmus: Vec<PathBuf> = std::env::args().skip(1).filter(|a| a.ends_with(".fmu")).map(PathBuf::from).collect();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut fmus: Vec<PathBuf> = args.iter().filter(|a| a.ends_with(".fmu")).map(PathBuf::from).collect();
+    let torque_nm: Option<f64> =
+        args.iter().find_map(|a| a.strip_prefix("--torque-nm=")).map(|t| t.parse().expect("--torque-nm=T: T₁ in N·m"));
     if fmus.is_empty() {
         fmus = vec![root.join("out/KurokawaSpur.fmu"), root.join("out/SmallHelical.fmu")];
     }
+    println!("T₁: {}", torque_nm.map_or("each pair's operating torque".to_string(), |t| format!("{t} N·m")));
     println!(
         "| FMU | mesh frequency | coupling | µs per doStep (C API) | µs per advance | overhead µs | internal steps | solves | evaluations | µs per solve | µs per evaluation | real-time factor (C API) |"
     );
@@ -198,7 +203,7 @@ fn main() {
         };
         let pair = Pair {
             teeth: [model.pair.gear1.teeth as f64, model.pair.gear2.teeth as f64],
-            torque_1_nm: model.pair.operating_torque_nm,
+            torque_1_nm: torque_nm.unwrap_or(model.pair.operating_torque_nm),
         };
         let name = fmu.file_stem().and_then(|s| s.to_str()).unwrap_or("?");
         for (mesh_hz, h) in CASES {

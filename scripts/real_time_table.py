@@ -10,8 +10,11 @@ angular_step_bound_s`; 1 µs-spaced for the lumped FMU's max_step) and the real-
 gear's `inertia_i` at twice its start value: a gear on a shaft, where the PMOR-Hertz FMU's
 fast/slow split differs from the build's.
 
+T₁ is each FMU's operating torque (its vendor annotation) unless `--torque-nm` is given, so one
+run covers pairs with different ratings:
+
     .venv/bin/python scripts/real_time_table.py out/KurokawaSpur.fmu out/KurokawaSpurLumped.fmu \\
-        --mesh-hz 500,1500,3000,5000
+        out/SmallHelical.fmu out/SmallHelicalLumped.fmu
 """
 
 import argparse
@@ -20,6 +23,7 @@ import sys
 
 sys.path.insert(0, __file__.rsplit("/scripts/", 1)[0] + "/python")
 from gearfmu.at_speed import Fmu, brake_case  # noqa: E402
+from gearfmu.sweep import operating_torque_nm  # noqa: E402
 
 
 def floats(text: str) -> list[float]:
@@ -42,9 +46,9 @@ def substeps(fmu: Fmu, mesh_hz: float, step_s: float) -> int:
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("fmus", nargs="+")
-    p.add_argument("--mesh-hz", type=floats, default=floats("500,1500,3000,5000"))
+    p.add_argument("--mesh-hz", type=floats, default=floats("500,1500,3000,5000,8000"))
     p.add_argument("--steps-us", type=floats, default=floats("20,100"))
-    p.add_argument("--torque-nm", type=float, default=185.0, help="T₁ (N·m)")
+    p.add_argument("--torque-nm", type=float, help="T₁ (N·m; default: each FMU's operating torque)")
     p.add_argument("--samples-per-pitch", type=int, default=20,
                    help="the PMOR-Hertz build's angular samples per pitch n_θ (the default build's)")
     p.add_argument("--t-end", type=float, default=0.02, help="simulated time per case (s)")
@@ -56,11 +60,12 @@ def main() -> int:
     for path in args.fmus:
         fmu = Fmu(path)
         fmu.samples_per_pitch = args.samples_per_pitch
+        torque_nm = args.torque_nm if args.torque_nm is not None else operating_torque_nm(path)
         for mesh_hz in args.mesh_hz:
             for step_us in args.steps_us:
                 for doubled in (False, True):
                     params = {name: 2.0 * fmu.start[name] for name in ("inertia_1", "inertia_2")} if doubled else {}
-                    r = brake_case(fmu, mesh_hz, step_us * 1e-6, args.torque_nm, t_end_s=args.t_end,
+                    r = brake_case(fmu, mesh_hz, step_us * 1e-6, torque_nm, t_end_s=args.t_end,
                                    parameters=params)
                     failed += not r["completed"]
                     n = substeps(fmu, mesh_hz, step_us * 1e-6)
