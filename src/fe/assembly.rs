@@ -192,6 +192,12 @@ impl Cholesky {
         Ok(Cholesky { symbolic, values, n: k.nrows() })
     }
 
+    /// The symbolic analysis (ordering, elimination tree, supernodes), for another factorization
+    /// of a matrix with K's pattern (the Sturm check's LDLᵀ of K − σM).
+    pub fn symbolic(&self) -> &SymbolicCholesky<usize> {
+        &self.symbolic
+    }
+
     /// The fill-reducing ordering of the factor (None: identity).
     pub fn ordering(&self) -> Option<PermRef<'_, usize>> {
         self.symbolic.perm()

@@ -6,13 +6,13 @@
 use super::assembly::Cholesky;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
-use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{get_global_parallelism, Accum, Mat, Par, Side};
+use faer::{get_global_parallelism, Accum, Mat, Side};
 use nalgebra::DMatrix;
 
 #[derive(Debug, Clone)]
@@ -188,7 +188,7 @@ pub fn lowest_modes_factored(
     // The shift: midway between λ_count and the next distinct (converged) Ritz value.
     let sigma = 0.5 * (values[count - 1] + values[next]);
     let expected = values.iter().filter(|&&l| l < sigma).count();
-    let sturm = sturm_count_ordered(k, m, sigma, chol.ordering())?;
+    let sturm = sturm_count_factored(k, m, sigma, chol)?;
     Ok(Modes {
         eigenvalues: values[..count].to_vec(),
         vectors: x,
@@ -252,19 +252,35 @@ fn append(a: &mut Mat<f64>, b: &Mat<f64>) {
 }
 
 /// Number of eigenvalues of K x = λ M x below σ: by Sylvester's law of inertia, the number of
-/// negative pivots of an LDLᵀ factorization of K − σM (simplicial, so D sits on L's diagonal).
+/// negative pivots of an LDLᵀ factorization of K − σM (AMD ordering).
 pub fn sturm_count(k: &SparseColMat<usize, f64>, m: &SparseColMat<usize, f64>, sigma: f64) -> Result<usize, String> {
-    sturm_count_ordered(k, m, sigma, None)
+    let shifted = shifted(k, m, sigma)?;
+    let symbolic =
+        factorize_symbolic_cholesky(shifted.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
+            .map_err(|e| format!("symbolic LDLᵀ: {e:?}"))?;
+    negative_pivots_of_ldlt(&symbolic, &shifted)
 }
 
-/// As [`sturm_count`], with a fill-reducing ordering of K's pattern (K − σM has K's pattern when M
-/// is consistent): K's own nested dissection fills the LDLᵀ far less than AMD does on a 3-D mesh.
-pub fn sturm_count_ordered(
+/// As [`sturm_count`], on the symbolic analysis of K's own Cholesky factor (its nested
+/// dissection, elimination tree and supernodes): K − σM has K's pattern (a consistent mass
+/// couples only what the stiffness couples), so nothing is analysed twice, and the LDLᵀ is
+/// supernodal and parallel like the Cholesky factorization. The small helical pair's gear 2
+/// (z = 41) spent most of its eigenmode stage in the simplicial, sequential LDLᵀ this replaced.
+pub fn sturm_count_factored(
     k: &SparseColMat<usize, f64>,
     m: &SparseColMat<usize, f64>,
     sigma: f64,
-    ordering: Option<faer::perm::PermRef<'_, usize>>,
+    chol: &Cholesky,
 ) -> Result<usize, String> {
+    negative_pivots_of_ldlt(chol.symbolic(), &shifted(k, m, sigma)?)
+}
+
+/// K − σM, assembled from both matrices' entries.
+fn shifted(
+    k: &SparseColMat<usize, f64>,
+    m: &SparseColMat<usize, f64>,
+    sigma: f64,
+) -> Result<SparseColMat<usize, f64>, String> {
     let n = k.nrows();
     let mut triplets = Vec::with_capacity(k.compute_nnz() + m.compute_nnz());
     for (a, scale) in [(k, 1.0), (m, -sigma)] {
@@ -275,32 +291,37 @@ pub fn sturm_count_ordered(
             }
         }
     }
-    let shifted = SparseColMat::try_new_from_triplets(n, n, &triplets).map_err(|e| format!("{e:?}"))?;
-    let symbolic = factorize_symbolic_cholesky(
-        shifted.symbolic(),
-        Side::Lower,
-        ordering.map_or(SymmetricOrdering::Amd, SymmetricOrdering::Custom),
-        CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
-            ..Default::default()
-        },
-    )
-    .map_err(|e| format!("symbolic LDLᵀ: {e:?}"))?;
+    SparseColMat::try_new_from_triplets(n, n, &triplets).map_err(|e| format!("{e:?}"))
+}
+
+/// The negative entries of D in A = L D Lᵀ (L unit lower triangular, no pivoting: the inertia
+/// is A's whenever the factorization exists). faer keeps D on the factor's diagonal: first in
+/// each column of a simplicial factor, on the diagonal of each supernode's top block otherwise.
+fn negative_pivots_of_ldlt(symbolic: &SymbolicCholesky<usize>, a: &SparseColMat<usize, f64>) -> Result<usize, String> {
     let mut values = vec![0.0; symbolic.len_val()];
-    let mut buffer = MemBuffer::new(symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()));
+    let par = get_global_parallelism();
+    let mut buffer = MemBuffer::new(symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()));
     symbolic
         .factorize_numeric_ldlt(
             &mut values,
-            shifted.as_ref(),
+            a.as_ref(),
             Side::Lower,
             LdltRegularization::default(),
-            Par::Seq,
+            par,
             MemStack::new(&mut buffer),
             Default::default(),
         )
         .map_err(|e| format!("LDLᵀ of K − σM failed (σ on an eigenvalue?): {e:?}"))?;
-    match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => Ok((0..n).filter(|&j| values[s.col_ptr()[j]] < 0.0).count()),
-        SymbolicCholeskyRaw::Supernodal(_) => Err("expected a simplicial factorization".into()),
-    }
+    Ok(match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => (0..a.nrows()).filter(|&j| values[s.col_ptr()[j]] < 0.0).count(),
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let factor = SupernodalLdltRef::new(s, &values);
+            (0..s.n_supernodes())
+                .map(|i| {
+                    let block = factor.supernode(i).val();
+                    (0..block.ncols()).filter(|&j| block[(j, j)] < 0.0).count()
+                })
+                .sum()
+        }
+    })
 }
