@@ -1371,10 +1371,11 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
         .map_err(anyhow::Error::msg)?;
         bar.finish_and_clear();
         println!(
-            "gear {} (z = {}, {} DOFs): {} block steps; Sturm count below the shift {} = Ritz values below it {}{}",
+            "gear {} (z = {}, {} DOFs, {:.1} M non-zeros in K's Cholesky factor): {} block steps; Sturm count below the shift {} = Ritz values below it {}{}",
             i + 1,
             gear.teeth,
             dofs.n_free,
+            chol.factor_nnz() as f64 * 1e-6,
             modes.iterations,
             modes.sturm_count,
             modes.ritz_values_below_shift,

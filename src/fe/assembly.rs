@@ -146,7 +146,7 @@ pub struct Cholesky {
     n: usize,
 }
 
-/// Right-hand sides per block in `solve_block`.
+/// Right-hand sides per block in `solve_block` (at most).
 pub const SOLVE_BLOCK: usize = 64;
 
 impl Cholesky {
@@ -208,11 +208,15 @@ impl Cholesky {
         self.symbolic.len_val()
     }
 
-    /// Solves K X = B for a block of right-hand sides (columns of `b`), in place.
+    /// Solves K X = B for a block of right-hand sides (columns of `b`), in place: the columns
+    /// split into one chunk per thread (at most `SOLVE_BLOCK` wide), each solved sequentially.
+    /// A Lanczos block of 8 is then two solves of 4 on two cores, not one of 8 on one: the
+    /// solve streams the whole factor per chunk, and the eigen stage is mostly these solves.
     pub fn solve_block(&self, b: &mut Mat<f64>) {
         assert_eq!(b.nrows(), self.n);
         let llt = LltRef::new(&self.symbolic, &self.values);
-        b.as_mut().par_col_chunks_mut(SOLVE_BLOCK).for_each(|block| {
+        let chunk = b.ncols().div_ceil(rayon::current_num_threads()).clamp(1, SOLVE_BLOCK);
+        b.as_mut().par_col_chunks_mut(chunk).for_each(|block| {
             let mut buffer = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(block.ncols(), Par::Seq));
             llt.solve_in_place_with_conj(Conj::No, block, Par::Seq, MemStack::new(&mut buffer));
         });

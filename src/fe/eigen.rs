@@ -97,7 +97,7 @@ pub fn lowest_modes_factored(
     let b = KRYLOV_BLOCK.min(n);
     // Start vectors: the diagonal of M (all DOFs excited), then pseudo-random columns.
     let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut x = Mat::from_fn(n, b, |_, j| {
+    let x = Mat::from_fn(n, b, |_, j| {
         if j == 0 {
             1.0
         } else {
@@ -107,6 +107,7 @@ pub fn lowest_modes_factored(
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         }
     });
+    let mut mx = mat_mul_sparse(m, &x);
     // The space V (M-orthonormal columns), with KV and MV kept for the residuals, and the
     // projection VᵀKV grown by one block row and column per step.
     let (mut v, mut kv, mut mv) = (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(n, 0));
@@ -122,13 +123,13 @@ pub fn lowest_modes_factored(
     let residual_bound = tolerance.sqrt();
     for step in 1..=max_iterations {
         steps = step;
-        let mut y = mat_mul_sparse(m, &x);
+        let mut y = mx;
         chol.solve_block(&mut y); // Y = K⁻¹ M X
-        let y = m_orthonormal_complement(m, &v, &mv, y);
+        let (y, my) = m_orthonormal_complement(m, &v, &mv, y);
         if y.ncols() == 0 {
             break; // V is an invariant subspace: nothing new to add.
         }
-        let (ky, my) = (mat_mul_sparse(k, &y), mat_mul_sparse(m, &y));
+        let ky = mat_mul_sparse(k, &y);
         let (old, new) = (v.ncols(), y.ncols());
         let cross = v.transpose() * &ky;
         let own = y.transpose() * &ky;
@@ -145,7 +146,7 @@ pub fn lowest_modes_factored(
         append(&mut v, &y);
         append(&mut kv, &ky);
         append(&mut mv, &my);
-        x = y;
+        mx = my; // the next block is K⁻¹M·Y: M·Y is at hand
         if v.ncols() <= count {
             continue;
         }
@@ -188,6 +189,9 @@ pub fn lowest_modes_factored(
     // The shift: midway between λ_count and the next distinct (converged) Ritz value.
     let sigma = 0.5 * (values[count - 1] + values[next]);
     let expected = values.iter().filter(|&&l| l < sigma).count();
+    // The Krylov space (V, KV, MV: three n × (steps·block) arrays) is done with: freed before
+    // the LDLᵀ, whose factor is as large as K's Cholesky factor, is allocated.
+    drop((v, kv, mv));
     let sturm = sturm_count_factored(k, m, sigma, chol)?;
     Ok(Modes {
         eigenvalues: values[..count].to_vec(),
@@ -199,10 +203,18 @@ pub fn lowest_modes_factored(
     })
 }
 
-/// Y with V's span removed and its columns made M-orthonormal (VᵀMY = 0, YᵀMY = I): two passes
-/// of block Gram–Schmidt in the M inner product, then the symmetric orthonormalization through
-/// the eigenvectors of YᵀMY; directions that are (numerically) already in V are dropped.
-fn m_orthonormal_complement(m: &SparseColMat<usize, f64>, v: &Mat<f64>, mv: &Mat<f64>, mut y: Mat<f64>) -> Mat<f64> {
+/// Y with V's span removed and its columns made M-orthonormal (VᵀMY = 0, YᵀMY = I), returned
+/// with M·Y: two passes of block Gram–Schmidt in the M inner product, then the symmetric
+/// orthonormalization through the eigenvectors of YᵀMY; directions that are (numerically)
+/// already in V are dropped. M·Y is formed once, after the Gram–Schmidt passes, and follows Y
+/// through each orthonormalization (M·(Y S) = (M·Y) S): the sparse products with M were the
+/// largest single cost of a block step.
+fn m_orthonormal_complement(
+    m: &SparseColMat<usize, f64>,
+    v: &Mat<f64>,
+    mv: &Mat<f64>,
+    mut y: Mat<f64>,
+) -> (Mat<f64>, Mat<f64>) {
     // Twice is enough (Kahan–Parlett): the second pass removes what round-off left of V.
     for _ in 0..2 {
         if v.ncols() > 0 {
@@ -210,19 +222,20 @@ fn m_orthonormal_complement(m: &SparseColMat<usize, f64>, v: &Mat<f64>, mv: &Mat
             y -= v * &c;
         }
     }
+    let mut my = mat_mul_sparse(m, &y);
     // The second normalization makes Y's own columns orthonormal to round-off.
     for _ in 0..2 {
-        let my = mat_mul_sparse(m, &y);
         let g = gram(&y, &my);
         let eig = nalgebra::SymmetricEigen::new((&g + g.transpose()) * 0.5);
         let largest = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
         let keep: Vec<usize> = (0..g.ncols()).filter(|&j| eig.eigenvalues[j] > 1e-12 * largest).collect();
-        let scale = DMatrix::from_fn(g.ncols(), keep.len(), |r, c| {
+        let scale = to_faer(&DMatrix::from_fn(g.ncols(), keep.len(), |r, c| {
             eig.eigenvectors[(r, keep[c])] / eig.eigenvalues[keep[c]].sqrt()
-        });
-        y = &y * &to_faer(&scale);
+        }));
+        y = &y * &scale;
+        my = &my * &scale;
     }
-    y
+    (y, my)
 }
 
 /// ‖K x − λ M x‖ / ‖K x‖ of the first `count` Ritz pairs (x = V q), from KV and MV.
@@ -324,4 +337,75 @@ fn negative_pivots_of_ldlt(symbolic: &SymbolicCholesky<usize>, a: &SparseColMat<
                 .sum()
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::sparse::linalg::SupernodalThreshold;
+
+    /// The 5-point Laplacian on an n × n grid, fixed on its boundary (K), with M = I: its
+    /// eigenvalues are 4 sin²(pπ/2(n+1)) + 4 sin²(qπ/2(n+1)), p, q = 1…n (closed form).
+    fn grid_laplacian(n: usize) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>, Vec<f64>) {
+        let index = |i: usize, j: usize| i * n + j;
+        let mut k = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                k.push(Triplet::new(index(i, j), index(i, j), 4.0));
+                if i + 1 < n {
+                    k.push(Triplet::new(index(i, j), index(i + 1, j), -1.0));
+                    k.push(Triplet::new(index(i + 1, j), index(i, j), -1.0));
+                }
+                if j + 1 < n {
+                    k.push(Triplet::new(index(i, j), index(i, j + 1), -1.0));
+                    k.push(Triplet::new(index(i, j + 1), index(i, j), -1.0));
+                }
+            }
+        }
+        let m: Vec<_> = (0..n * n).map(|i| Triplet::new(i, i, 1.0)).collect();
+        let s = |p: usize| (p as f64 * std::f64::consts::PI / (2.0 * (n + 1) as f64)).sin().powi(2);
+        let mut exact: Vec<f64> = (1..=n).flat_map(|p| (1..=n).map(move |q| 4.0 * s(p) + 4.0 * s(q))).collect();
+        exact.sort_by(f64::total_cmp);
+        (
+            SparseColMat::try_new_from_triplets(n * n, n * n, &k).unwrap(),
+            SparseColMat::try_new_from_triplets(n * n, n * n, &m).unwrap(),
+            exact,
+        )
+    }
+
+    /// The Sturm count reads D off a simplicial and off a supernodal LDLᵀ alike: at shifts between
+    /// the closed-form eigenvalues, the negative pivots of K − σM are the eigenvalues below σ.
+    #[test]
+    fn sturm_count_of_both_factor_layouts_is_the_closed_form_count() {
+        let (k, m, exact) = grid_laplacian(24);
+        for threshold in [SupernodalThreshold::FORCE_SIMPLICIAL, SupernodalThreshold::FORCE_SUPERNODAL] {
+            let symbolic = factorize_symbolic_cholesky(
+                k.symbolic(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                faer::sparse::linalg::cholesky::CholeskySymbolicParams {
+                    supernodal_flop_ratio_threshold: threshold,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            if threshold == SupernodalThreshold::FORCE_SUPERNODAL {
+                match symbolic.raw() {
+                    SymbolicCholeskyRaw::Supernodal(s) => {
+                        let widest =
+                            (0..s.n_supernodes()).map(|i| s.supernode_end()[i] - s.supernode_begin()[i]).max().unwrap();
+                        assert!(widest > 1, "the test needs supernodes wider than a column");
+                    }
+                    SymbolicCholeskyRaw::Simplicial(_) => panic!("asked for a supernodal factor"),
+                }
+            }
+            for below in [1, 7, 50, 200, 400] {
+                // Midway between distinct eigenvalues (the grid's spectrum has double values).
+                let next = (below..exact.len()).find(|&j| exact[j] > exact[below - 1] * (1.0 + 1e-9)).unwrap();
+                let sigma = 0.5 * (exact[below - 1] + exact[next]);
+                let count = negative_pivots_of_ldlt(&symbolic, &shifted(&k, &m, sigma).unwrap()).unwrap();
+                assert_eq!(count, next, "σ = {sigma}: {threshold:?}");
+            }
+        }
+    }
 }
