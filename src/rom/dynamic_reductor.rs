@@ -282,6 +282,9 @@ pub fn build_dynamic_model(
             .collect();
         let n_nodes = model.mesh.mesh.nodes.len();
         let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
+        // The end of this gear's own stages (the two gears run side by side: without it, the
+        // last stage's cost could not be told from the other gear's).
+        progress(format!("gear {}: reduced ({} DOFs)", i + 1, model.dofs.n_free));
         Ok(GearFe {
             model,
             reduced,

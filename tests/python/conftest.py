@@ -1,7 +1,7 @@
 """Shared fixtures for the Python-side tests of the gearfmu FMUs.
 
 * ``gear_fmus`` (session): builds KurokawaSpur.fmu and KurokawaHelical.fmu with
-  ``cargo run --release -q -p fmu-build -- build ...`` and dumps the mesh law of
+  ``target/release/fmu-build build ...`` (after one `cargo build --release --workspace --all-targets`) and dumps the mesh law of
   each spec with ``fmu-build inspect --json`` into a temporary directory.
 * ``gear_case``: the same, parametrized over both gear pairs.
 * ``make_slave``: opens ``fmpy.fmi2.FMU2Slave`` instances (freed at teardown).
@@ -39,17 +39,33 @@ PMOR_SPECS = {
 REAL_OUTPUTS = ("phi_1", "phi_2", "w_1", "w_2", "dte", "dte_angle", "mesh_force", "mesh_stiffness")
 
 
-def _fmu_build(*args: str) -> subprocess.CompletedProcess:
+_WORKSPACE_BUILT = False
+
+
+def build_workspace() -> None:
+    """`cargo build --release --workspace --all-targets`, once per session.
+
+    The same targets as scripts/test.sh's build, so nothing recompiles: a build of fewer targets
+    (`cargo run -p fmu-build`, `cargo build --workspace`) resolves the dev-dependencies' features
+    differently and rebuilds the library, the FMU binary and fmu-build each time it alternates
+    with one of more (a minute to three per switch, measured in CI). It makes the FMU binary
+    (target/release/libgearfmu.so) that fmu-build packs, fmu-build and the Rust examples."""
+    global _WORKSPACE_BUILT
+    if _WORKSPACE_BUILT:
+        return
     cargo = shutil.which("cargo")
     if cargo is None:
         pytest.fail("cargo is not on PATH; cannot build the FMUs")
-    # Build the whole workspace first: `cargo run -p fmu-build` alone would not rebuild the FMU
-    # binary (the cdylib target/release/libgearfmu.so) that fmu-build packs into the .fmu.
-    build = [cargo, "build", "--release", "-q", "--workspace"]
+    build = [cargo, "build", "--release", "-q", "--workspace", "--all-targets"]
     proc = subprocess.run(build, cwd=REPO_ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         pytest.fail(f"`{' '.join(build)}` failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
-    cmd = [cargo, "run", "--release", "-q", "-p", "fmu-build", "--", *args]
+    _WORKSPACE_BUILT = True
+
+
+def _fmu_build(*args: str) -> subprocess.CompletedProcess:
+    build_workspace()
+    cmd = [str(REPO_ROOT / "target" / "release" / "fmu-build"), *args]
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         pytest.fail(f"`{' '.join(cmd)}` failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
@@ -72,11 +88,26 @@ def gear_fmus(tmp_path_factory) -> dict[str, GearCase]:
     from fmpy import extract
 
     out_dir = tmp_path_factory.mktemp("gearfmu")
+    fmu_dir = REPO_ROOT / "target" / "fmu"
+    fmu_dir.mkdir(parents=True, exist_ok=True)
+    # A PMOR-Hertz build writes the lumped FMU of the same spec beside it (`--lumped-fmu`: the
+    # law from the build's own statics, equal to a separate `--model lumped` reduction by
+    # `pmor_dynamics::the_builds_lumped_mesh_law_is_the_one_a_separate_reduction_gives`): one
+    # reduction per spec, not two.
+    built = set()
+    for spec, fmu_file, kind in PMOR_SPECS.values():
+        args = ["build", spec, "-o", str(fmu_dir / fmu_file), "--model", kind]
+        for lumped_spec, lumped_file, _ in GEAR_SPECS.values():
+            if lumped_spec == spec:
+                args += ["--lumped-fmu", str(fmu_dir / lumped_file)]
+                built.add(lumped_file)
+        _fmu_build(*args)
+        built.add(fmu_file)
     cases = {}
     for name, (spec, fmu_file, kind) in {**GEAR_SPECS, **PMOR_SPECS}.items():
-        fmu_path = REPO_ROOT / "target" / "fmu" / fmu_file
-        fmu_path.parent.mkdir(parents=True, exist_ok=True)
-        _fmu_build("build", spec, "-o", str(fmu_path.relative_to(REPO_ROOT)), "--model", kind)
+        fmu_path = fmu_dir / fmu_file
+        if fmu_file not in built:
+            _fmu_build("build", spec, "-o", str(fmu_path.relative_to(REPO_ROOT)), "--model", kind)
         mesh_json_path = out_dir / f"{name}_mesh.json"
         _fmu_build("inspect", spec, "--json", str(mesh_json_path))
         mesh = json.loads(mesh_json_path.read_text())

@@ -7,7 +7,6 @@ tau_2 = -20·w_2 from the previous step's output.
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 
 import numpy as np
@@ -15,7 +14,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from conftest import REPO_ROOT
+from conftest import REPO_ROOT, build_workspace
 
 OUTPUTS = ["phi_1", "phi_2", "w_1", "w_2", "dte", "mesh_force"]
 
@@ -47,10 +46,9 @@ def run_with_fmpy(case) -> np.ndarray:
 
 
 def run_with_fmi_crate(case, tmp_path) -> np.ndarray:
-    cargo = shutil.which("cargo")
-    assert cargo, "cargo is needed to run the Rust client"
+    build_workspace()  # examples/fmi_crate_run.rs, built with the workspace's other targets
     csv = tmp_path / f"{case.name}-fmi-crate.csv"
-    cmd = [cargo, "run", "--release", "-q", "--example", "fmi_crate_run", "--", str(case.fmu_path), str(csv)]
+    cmd = [str(REPO_ROOT / "target" / "release" / "examples" / "fmi_crate_run"), str(case.fmu_path), str(csv)]
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     lines = csv.read_text().splitlines()
