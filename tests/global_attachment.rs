@@ -126,3 +126,56 @@ fn partial_model_cut_at_the_lateral_reach_keeps_the_global_compliance() {
     assert!(change.abs() < 0.01, "the cut partial model changes the global compliance by {change}");
     assert!(cut_nodes * 3 < reference_nodes, "{cut_nodes} vs {reference_nodes}: the cut should be much smaller");
 }
+
+/// The tooth periodicity of the FE gear (a conservation-free, solver-independent identity): the
+/// attachment modes of a flank grid on several teeth, solved for the first tooth and turned onto
+/// the others (`global_attachment_modes_of_teeth`), equal the modes solved node by node on every
+/// tooth, on both gears of a spur and of a helical pair, drive and coast flanks.
+#[test]
+fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth() {
+    use gearfmu::contact::mesh_kinematics::{Flank, PairPlacement};
+    use gearfmu::rom::attachment::{global_attachment_modes, global_attachment_modes_of_teeth};
+    use gearfmu::rom::flank::FlankGrid;
+    for example in ["kurokawa_spur", "kurokawa_helical"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{example}.toml"));
+        let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
+        let place = PairPlacement::new(&p);
+        let depth = gearfmu::rom::reductor::contact_depth_m(&p);
+        let spec = MeshSpec { axial_slices: MeshSpec::axial_slices_for(&p, depth).max(2), ..Default::default() };
+        for (i, gear) in [&p.gear1, &p.gear2].into_iter().enumerate() {
+            let model = ClampedGear::new(&p, gear, &spec, Formulation::IncompatibleModes);
+            let chol = model.factorize().unwrap();
+            for flank in [Flank::Drive, Flank::Coast] {
+                let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, flank, &place, 1).unwrap();
+                assert!(grid.teeth.len() >= 3, "{example} gear {}: a grid on several teeth", i + 1);
+                assert!(
+                    gearfmu::rom::attachment::teeth_from_the_first(&model.mesh, &grid).is_some(),
+                    "{example} gear {} {flank:?}: every tooth of the grid is the first one turned (else nothing is turned)",
+                    i + 1
+                );
+                let (mesh, material, dofs) = (&model.mesh.mesh, &model.material, &model.dofs);
+                let direct = global_attachment_modes(mesh, material, model.formulation, dofs, &chol, &grid.nodes, depth, |_| {})
+                    .unwrap();
+                let turned =
+                    global_attachment_modes_of_teeth(&model.mesh, material, model.formulation, dofs, &chol, &grid, depth, |_| {})
+                        .unwrap();
+                let scale = (0..direct.ncols())
+                    .flat_map(|j| (0..direct.nrows()).map(move |r| (r, j)))
+                    .map(|(r, j)| direct[(r, j)].abs())
+                    .fold(0.0, f64::max);
+                let worst = (0..direct.ncols())
+                    .flat_map(|j| (0..direct.nrows()).map(move |r| (r, j)))
+                    .map(|(r, j)| (direct[(r, j)] - turned[(r, j)]).abs())
+                    .fold(0.0, f64::max);
+                println!(
+                    "{example} gear {} {flank:?}: {} teeth × {} nodes, max |ψ_turned − ψ_direct| = {:.2e} of max |ψ| {scale:.2e}",
+                    i + 1,
+                    grid.teeth.len(),
+                    grid.len() / grid.teeth.len(),
+                    worst
+                );
+                assert!(worst <= 1e-9 * scale, "{example} gear {} {flank:?}: turned modes differ by {worst:e}", i + 1);
+            }
+        }
+    }
+}

@@ -68,7 +68,7 @@ fn compressed_global_attachment_space_carries_the_line_load() {
 
     let mut previous_error = f64::INFINITY;
     for p_en in [0.99, 0.999, 0.9999] {
-        let c = compress(k, &psi, p_en);
+        let c = compress(k, psi.clone(), p_en);
         let reduced = galerkin(&c.basis);
         let error = (reduced - full) / full;
         println!(

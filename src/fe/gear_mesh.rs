@@ -117,6 +117,35 @@ pub struct GearMesh {
 }
 
 impl GearMesh {
+    /// The node that `node` becomes when the gear is turned on by `teeth` pitches (counter-
+    /// clockwise seen from +z for positive `teeth`): the same layer and place in the sector
+    /// `teeth` on. Node numbering is l·z·n_sector + k·n_sector + local.
+    pub fn node_turned_by_teeth(&self, node: usize, teeth: i64) -> usize {
+        let per_sector = self.nodes_per_sector;
+        let per_layer = self.teeth * per_sector;
+        let (l, rest) = (node / per_layer, node % per_layer);
+        let (k, local) = (rest / per_sector, rest % per_sector);
+        l * per_layer + ((k as i64 + teeth).rem_euclid(self.teeth as i64) as usize) * per_sector + local
+    }
+
+    /// The one-tooth rotation P of a nodal field (all nodes, 3 per node):
+    /// (P f)(layer l, sector k) = R(−2π/z)·f(l, k + shift); `shift` = −1 gives P⁻¹ (with
+    /// R(+2π/z)), which carries a field on tooth k onto tooth k + 1. The mesh is exactly cyclic,
+    /// so P maps the response to a load onto the response to the turned load.
+    pub fn rotate_by_teeth(&self, field: &[f64], shift: i64) -> Vec<f64> {
+        let angle = -(shift as f64) * 2.0 * PI / self.teeth as f64;
+        let (s, c) = angle.sin_cos();
+        let mut out = vec![0.0; field.len()];
+        for node in 0..field.len() / 3 {
+            let from = self.node_turned_by_teeth(node, shift);
+            let (fx, fy, fz) = (field[3 * from], field[3 * from + 1], field[3 * from + 2]);
+            out[3 * node] = c * fx - s * fy;
+            out[3 * node + 1] = s * fx + c * fy;
+            out[3 * node + 2] = fz;
+        }
+        out
+    }
+
     /// The node each node lands on under the half turn about the gear's x axis,
     /// (x, y, z) → (x, −y, −z). Every tooth is meshed symmetric about its axis and the face
     /// about its mid-plane, and a rotation keeps the hand of helix, so the mesh maps onto itself:

@@ -213,3 +213,74 @@ pub fn global_attachment_modes(
     }
     Ok(psi)
 }
+
+/// ψ_glob of a flank grid on several teeth of the gear mesh, solved for the first tooth's nodes
+/// only. The mesh is exactly cyclic (`fe::gear_mesh`) and the grid alike on every tooth (tooth-
+/// major, the same rows and layers), so the response to the unit normal load on a node of tooth
+/// t₀ + d is the first tooth's response turned on by d teeth (`GearMesh::rotate_by_teeth`): one
+/// block solve and one set of partial models instead of one per tooth. The partial model turns
+/// with its load, since it is cut by depth and reach from the load alone. A grid that is not
+/// such an image tooth by tooth (checked node by node and normal by normal) is solved whole.
+pub fn global_attachment_modes_of_teeth(
+    gear: &crate::fe::gear_mesh::GearMesh,
+    material: &Material,
+    formulation: Formulation,
+    dofs: &DofMap,
+    total_stiffness: &Cholesky,
+    flank: &super::flank::FlankGrid,
+    depth_m: f64,
+    progress: impl Fn(usize) + Sync,
+) -> Result<faer::Mat<f64>, String> {
+    use rayon::prelude::*;
+    let solve_whole = |progress| {
+        global_attachment_modes(&gear.mesh, material, formulation, dofs, total_stiffness, &flank.nodes, depth_m, progress)
+    };
+    let Some(turns) = teeth_from_the_first(gear, flank) else {
+        return solve_whole(progress);
+    };
+    let per_tooth = flank.len() / flank.teeth.len();
+    let first = global_attachment_modes(
+        &gear.mesh,
+        material,
+        formulation,
+        dofs,
+        total_stiffness,
+        &flank.nodes[..per_tooth],
+        depth_m,
+        progress,
+    )?;
+    let mut psi = faer::Mat::zeros(dofs.n_free, flank.len());
+    psi.as_mut().par_col_chunks_mut(1).enumerate().for_each(|(column, mut out)| {
+        let (slot, j) = (column / per_tooth, column % per_tooth);
+        let free: Vec<f64> = (0..dofs.n_free).map(|i| first[(i, j)]).collect();
+        let turned = if slot == 0 { dofs.expand(&free) } else { gear.rotate_by_teeth(&dofs.expand(&free), -turns[slot]) };
+        for (d, slot) in dofs.free.iter().enumerate() {
+            if let Some(i) = slot {
+                out[(*i, 0)] = turned[d];
+            }
+        }
+    });
+    Ok(psi)
+}
+
+/// The teeth each tooth of a flank grid lies on from its first (mod z), where every tooth's nodes
+/// and normals are the first tooth's turned on by that many teeth; `None` where they are not
+/// (or the grid has one tooth): then nothing is gained by turning.
+pub fn teeth_from_the_first(gear: &crate::fe::gear_mesh::GearMesh, flank: &super::flank::FlankGrid) -> Option<Vec<i64>> {
+    let teeth = flank.teeth.len();
+    if teeth < 2 || flank.len() % teeth != 0 {
+        return None;
+    }
+    let per_tooth = flank.len() / teeth;
+    let pitch = 2.0 * std::f64::consts::PI / gear.teeth as f64;
+    let turns: Vec<i64> = flank.teeth.iter().map(|&t| t as i64 - flank.teeth[0] as i64).collect();
+    let is_image = |slot: usize| {
+        let (s, c) = (turns[slot] as f64 * pitch).sin_cos();
+        (0..per_tooth).all(|j| {
+            let ((node0, n0), (node, n)) = (flank.nodes[j], flank.nodes[slot * per_tooth + j]);
+            let turned = [c * n0[0] - s * n0[1], s * n0[0] + c * n0[1], n0[2]];
+            gear.node_turned_by_teeth(node0, turns[slot]) == node && (0..3).all(|k| (turned[k] - n[k]).abs() < 1e-9)
+        })
+    };
+    (1..teeth).all(is_image).then_some(turns)
+}

@@ -171,28 +171,6 @@ fn mean_mesh_stiffness(model: &PmorModel, options: &DynamicBuildOptions) -> Resu
     })
 }
 
-/// The one-tooth rotation P of a nodal field (all nodes, 3 per node) of the structured gear
-/// mesh: (P f)(layer l, sector k) = R(−2π/z)·f(l, k + shift); `shift` = −1 gives P⁻¹ (with
-/// R(+2π/z)). Node numbering is l·z·n_sector + k·n_sector + local (`fe::gear_mesh`).
-pub fn rotate_by_teeth(gm: &GearMesh, field: &[f64], shift: i64) -> Vec<f64> {
-    let z = gm.teeth;
-    let per_sector = gm.nodes_per_sector;
-    let per_layer = z * per_sector;
-    let angle = -(shift as f64) * 2.0 * std::f64::consts::PI / z as f64;
-    let (s, c) = angle.sin_cos();
-    let mut out = vec![0.0; field.len()];
-    for node in 0..field.len() / 3 {
-        let (l, rest) = (node / per_layer, node % per_layer);
-        let (k, local) = (rest / per_sector, rest % per_sector);
-        let from = l * per_layer + ((k as i64 + shift).rem_euclid(z as i64) as usize) * per_sector + local;
-        let (fx, fy, fz) = (field[3 * from], field[3 * from + 1], field[3 * from + 2]);
-        out[3 * node] = c * fx - s * fy;
-        out[3 * node + 1] = s * fx + c * fy;
-        out[3 * node + 2] = fz;
-    }
-    out
-}
-
 /// G·f: the in-plane rotation generator ẑ× applied node by node.
 fn generator(field: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; field.len()];
@@ -206,6 +184,18 @@ fn generator(field: &[f64]) -> Vec<f64> {
 /// A faer matrix with the given columns.
 fn from_columns(cols: &[Vec<f64>]) -> Mat<f64> {
     Mat::from_fn(cols[0].len(), cols.len(), |i, j| cols[j][i])
+}
+
+/// A·f for each field f: one block product, split over the threads (a field at a time, the
+/// sparse product is sequential and was the largest cost of the shapes stage).
+fn sparse_times_fields(a: &faer::sparse::SparseColMat<usize, f64>, fields: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    if fields.is_empty() {
+        return Vec::new();
+    }
+    let f = from_columns(fields);
+    let mut af = Mat::zeros(a.nrows(), f.ncols());
+    sparse_dense_matmul(af.as_mut(), Accum::Replace, a.as_ref(), f.as_ref(), 1.0, faer::get_global_parallelism());
+    (0..af.ncols()).map(|j| (0..af.nrows()).map(|i| af[(i, j)]).collect()).collect()
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -262,7 +252,9 @@ pub fn build_dynamic_model(
             }
         };
         progress(format!("gear {}: eigenmodes", i + 1));
-        let mass = model.mass();
+        let n_nodes = model.mesh.mesh.nodes.len();
+        let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
+        let mass = model.dofs.restrict(&mass_full);
         let probe = options.modes + 6;
         let modes = eigen::lowest_modes_factored(&model.stiffness, &mass, &factor, probe, 1e-10, 400, |_, _| {})?;
         if modes.sturm_count != modes.ritz_values_below_shift {
@@ -280,8 +272,6 @@ pub fn build_dynamic_model(
         let phi: Vec<Vec<f64>> = (0..n_k)
             .map(|c| model.dofs.expand(&(0..model.dofs.n_free).map(|r| modes.vectors[(r, c)]).collect::<Vec<_>>()))
             .collect();
-        let n_nodes = model.mesh.mesh.nodes.len();
-        let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
         // The end of this gear's own stages (the two gears run side by side: without it, the
         // last stage's cost could not be told from the other gear's).
         progress(format!("gear {}: reduced ({} DOFs)", i + 1, model.dofs.n_free));
@@ -365,7 +355,7 @@ pub fn build_dynamic_model(
     // Gear 1's half-turned pose is one pitch behind the exact image (its tooth k is tooth 1 − k
     // here): one more tooth rotation.
     let turn_back = |i: usize, wraps: i64, field: &[f64], half_turn: &[usize]| -> Vec<f64> {
-        let turned = rotate_by_teeth(&fe[i].model.mesh, field, wraps + (i == 0) as i64);
+        let turned = fe[i].model.mesh.rotate_by_teeth(field, wraps + (i == 0) as i64);
         GearMesh::half_turn_field(half_turn, &turned)
     };
     let coast_field = |i: usize, t: usize, s: usize, half_turn: &[usize]| -> Vec<f64> {
@@ -395,7 +385,7 @@ pub fn build_dynamic_model(
         progress(format!("gear {}: shapes and invariants", i + 1));
         let gear = if i == 0 { &pair.gear1 } else { &pair.gear2 };
         let gm = &g.model.mesh;
-        let m_times = |f: &[f64]| assembly::mul(&g.mass_full, f);
+        let m_times_all = |fields: &[Vec<f64>]| sparse_times_fields(&g.mass_full, fields);
         let n_torques = options.rom_torques_nm.len();
         let per_flank = n_torques + options.sharing_shapes;
         let n_t = 2 * per_flank;
@@ -420,10 +410,11 @@ pub fn build_dynamic_model(
         // interpolated pair of such columns can cancel (a singular mass matrix mid-interval —
         // seen as a spurious impulse before this was changed). Nearly parallel columns are only
         // ill-conditioned, and their coupled frequency is the physical Rayleigh quotient.
-        let m_phi: Vec<Vec<f64>> = g.phi.iter().map(|p| m_times(p)).collect();
-        let clean = |fields: &[Vec<f64>]| -> Vec<Vec<f64>> {
-            fields
-                .iter()
+        let m_phi = m_times_all(&g.phi);
+        // (field, M·field) of each field made residual and of unit modal mass.
+        let clean = |fields: &[Vec<f64>]| -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+            let mut residual: Vec<Vec<f64>> = fields
+                .par_iter()
                 .map(|f| {
                     let mut v = f.clone();
                     for _pass in 0..2 {
@@ -432,21 +423,25 @@ pub fn build_dynamic_model(
                             v.iter_mut().zip(p).for_each(|(x, y)| *x -= a * y);
                         }
                     }
-                    let norm = dot(&m_times(&v), &v).sqrt();
-                    v.iter_mut().for_each(|x| *x /= norm);
                     v
                 })
-                .collect()
+                .collect();
+            let mut m_residual = m_times_all(&residual);
+            for (v, mv) in residual.iter_mut().zip(&mut m_residual) {
+                let norm = dot(mv, v).sqrt();
+                v.iter_mut().chain(mv.iter_mut()).for_each(|x| *x /= norm);
+            }
+            (residual, m_residual)
         };
-        let base: Vec<Vec<Vec<f64>>> = raw[..n_theta].iter().map(|f| clean(f)).collect();
+        let (base, m_base): (Vec<Vec<Vec<f64>>>, Vec<Vec<Vec<f64>>>) =
+            raw[..n_theta].iter().map(|f| clean(f)).unzip();
         // The shapes of one sample must span n_t directions. Several torque levels often do
         // not: the global contact shapes of PMOR-Hertz are nearly proportional to the load (the
         // nonlinear local part is the analytic Hertz law), so two levels are the same direction
         // to 1e-10 and the mass matrix is singular. Refuse that instead of integrating noise. (A
         // drive and a coast shape load opposite flanks; a sharing shape is never parallel to the
         // static one, `rom::sharing`.)
-        for (s_idx, sample) in base.iter().enumerate() {
-            let m_sample: Vec<Vec<f64>> = sample.iter().map(|f| m_times(f)).collect();
+        for (s_idx, (sample, m_sample)) in base.iter().zip(&m_base).enumerate() {
             let gram = DMatrix::from_fn(n_t, n_t, |r, c| dot(&m_sample[r], &sample[c]));
             let eig = nalgebra::SymmetricEigen::new(gram).eigenvalues;
             let ratio = eig.min() / eig.max();
@@ -461,18 +456,22 @@ pub fn build_dynamic_model(
             }
         }
         // Closure check: the sample one pitch on against P·S₀, every column.
-        let one_on = clean(&raw[n_theta]);
-        for column in 0..n_t {
-            let p_s0 = rotate_by_teeth(gm, &base[0][column], 1);
-            let diff: Vec<f64> = one_on[column].iter().zip(&p_s0).map(|(a, b)| a - b).collect();
-            closure[i] = closure[i].max(dot(&m_times(&diff), &diff).sqrt());
+        let (one_on, _) = clean(&raw[n_theta]);
+        let differences: Vec<Vec<f64>> = (0..n_t)
+            .map(|column| {
+                let p_s0 = gm.rotate_by_teeth(&base[0][column], 1);
+                one_on[column].iter().zip(&p_s0).map(|(a, b)| a - b).collect()
+            })
+            .collect();
+        for (diff, m_diff) in differences.iter().zip(m_times_all(&differences)) {
+            closure[i] = closure[i].max(dot(&m_diff, diff).sqrt());
         }
         // Stored samples s = −2 … n_θ + 2 with the periodic closure S_{s+n_θ} = P·S_s.
         let stored: Vec<Vec<Vec<f64>>> = (-2..=n_theta as i64 + 2)
             .map(|s| {
                 let k = s.div_euclid(n_theta as i64);
                 let r = s.rem_euclid(n_theta as i64) as usize;
-                base[r].iter().map(|f| if k == 0 { f.clone() } else { rotate_by_teeth(gm, f, k) }).collect()
+                base[r].iter().map(|f| if k == 0 { f.clone() } else { gm.rotate_by_teeth(f, k) }).collect()
             })
             .collect();
 
@@ -511,7 +510,7 @@ pub fn build_dynamic_model(
             out
         };
         let shape_free: Vec<Vec<f64>> = stored.iter().flat_map(|s| s.iter().map(|f| free(f))).collect();
-        let k_shapes: Vec<Vec<f64>> = shape_free.par_iter().map(|v| assembly::mul(&g.model.stiffness, v)).collect();
+        let k_shapes = sparse_times_fields(&g.model.stiffness, &shape_free);
 
         let sample: Vec<SampleInvariants> = (0..n_a)
             .map(|a| SampleInvariants {
@@ -539,17 +538,19 @@ pub fn build_dynamic_model(
             }
         }
         // The tooth rotation on Φ: R = ΦᵀM P⁻¹Φ and the part of P⁻¹Φ outside span Φ.
-        let back: Vec<Vec<f64>> = g.phi.iter().map(|p| rotate_by_teeth(gm, p, -1)).collect();
+        let back: Vec<Vec<f64>> = g.phi.iter().map(|p| gm.rotate_by_teeth(p, -1)).collect();
         let pitch_map = DMatrix::from_fn(n_k, n_k, |r, c| dot(&m_phi[r], &back[c]));
-        invariance[i] = (0..n_k)
+        let outside: Vec<Vec<f64>> = (0..n_k)
             .map(|c| {
                 let mut v = back[c].clone();
                 for (r, p) in g.phi.iter().enumerate() {
                     v.iter_mut().zip(p).for_each(|(x, y)| *x -= pitch_map[(r, c)] * y);
                 }
-                dot(&m_times(&v), &v).sqrt()
+                v
             })
-            .fold(0.0, f64::max);
+            .collect();
+        invariance[i] =
+            outside.iter().zip(m_times_all(&outside)).map(|(v, mv)| dot(&mv, v).sqrt()).fold(0.0, f64::max);
         // Flank rows for the online contact: the teeth that can mesh, with a margin of two pairs
         // on each side (an anchor may lag its angle by a step near a pitch boundary); three for
         // the coast flanks, whose reference pitch is the half turn of another interval of θ₂.

@@ -8,7 +8,7 @@
 //!   static response to a unit load along its normal — so that the reduced statics are exact FE
 //!   statics for any load on those nodes.
 
-use super::attachment::global_attachment_modes;
+use super::attachment::global_attachment_modes_of_teeth;
 use super::flank::{FlankGrid, Shares};
 use super::svd::compress;
 use crate::fe::assembly::{Cholesky, DofMap};
@@ -96,9 +96,8 @@ pub struct Reconstructor {
 impl Reconstructor {
     /// The FE displacement field (all DOFs, node-major) of reduced coordinates q.
     pub fn displacement(&self, q: &[f64]) -> Vec<f64> {
-        let free: Vec<f64> =
-            (0..self.basis.nrows()).map(|i| (0..q.len()).map(|j| self.basis[(i, j)] * q[j]).sum()).collect();
-        self.dofs.expand(&free)
+        let free = &self.basis * faer::ColRef::from_slice(q);
+        self.dofs.expand(free.try_as_col_major().expect("an owned column is contiguous").as_slice())
     }
 }
 
@@ -175,17 +174,17 @@ pub fn pmor_hertz(
     p_en: f64,
     progress: impl Fn(usize) + Sync,
 ) -> Result<(ReducedGear, Reconstructor, CompressionReport), String> {
-    let psi = global_attachment_modes(
-        &model.mesh.mesh,
+    let psi = global_attachment_modes_of_teeth(
+        &model.mesh,
         &model.material,
         model.formulation,
         &model.dofs,
         factor,
-        &flank.nodes,
+        &flank,
         depth_m,
         progress,
     )?;
-    let c = compress(&model.stiffness, &psi, p_en);
+    let c = compress(&model.stiffness, psi, p_en);
     // K_sv = Ũᵀ K_r Ũ is diagonal (σ); dividing each column by √σ makes it the identity, which
     // keeps the reduced coordinates well scaled.
     let mut basis = c.basis;
@@ -210,7 +209,8 @@ pub fn pmor_hertz(
         .solve_upper_triangular(&nalgebra::DMatrix::identity(n, n))
         .ok_or("singular Cholesky factor of the reduced stiffness")?;
     let correction = Mat::from_fn(n, n, |i, j| inverse_lt[(i, j)]);
-    let basis = &basis * &correction;
+    let mut basis = basis;
+    super::svd::right_multiply_in_place(&mut basis, correction.as_ref());
     // The corrected stiffness from the formed K_sv in the small space (Tᵀ·K_sv·T), not by a
     // second projection of the FE stiffness: the same product, n_sv³ instead of n_FE·n_sv².
     let stiffness = correction.transpose() * &scaled * &correction;
