@@ -34,7 +34,9 @@ def build(tool: Path, spec: Path, out: Path) -> dict:
     events = [(float(m.group(1)), m.group(2)) for m in re.finditer(r"([0-9.]+) s ([^,]+)", body)]
     events.append((float(done.split()[0]), "done"))
     peak_kib = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", proc.stderr).group(1))
-    return {"events": events, "wall_s": events[-1][0], "peak_gb": peak_kib * 1024 / 1e9}
+    estimate = next((float(m.group(1)) for _, name in events if (m := re.match(r"estimated peak ([0-9.]+) GB", name))), None)
+    events = [e for e in events if not e[1].startswith("estimated peak")]
+    return {"events": events, "wall_s": events[-1][0], "peak_gb": peak_kib * 1024 / 1e9, "estimate_gb": estimate}
 
 
 def stage_seconds(events: list[tuple[float, str]], gear: int, stage: str) -> str:
@@ -60,19 +62,21 @@ def main() -> None:
     parser.add_argument("--tool", type=Path, default=REPO_ROOT / "target" / "release" / "fmu-build")
     parser.add_argument("--baseline-tool", type=Path)
     parser.add_argument("--examples", nargs="+", default=list(EXAMPLES))
+    parser.add_argument("--keep", type=Path, help="keep the built FMUs in this directory ({example}-{tool}.fmu)")
     args = parser.parse_args()
     tools = ([("baseline", args.baseline_tool)] if args.baseline_tool else []) + [("this", args.tool)]
-    header = ["example", "tool", "build (s)", "peak (GB)"] + [f"{s} g1 / g2 (s)" for s in GEAR_STAGES]
+    header = ["example", "tool", "build (s)", "peak (GB)", "estimated peak (GB)"] + [f"{s} g1 / g2 (s)" for s in GEAR_STAGES]
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
     with tempfile.TemporaryDirectory() as tmp:
         for example in args.examples:
             spec = REPO_ROOT / "examples" / f"{example}.toml"
             for label, tool in tools:
-                r = build(tool, spec, Path(tmp) / f"{example}-{label}.fmu")
+                r = build(tool, spec, (args.keep or Path(tmp)) / f"{example}-{label}.fmu")
                 print(f"{example} {label}: {r['events']}", file=sys.stderr, flush=True)
                 cells = [f"{stage_seconds(r['events'], 1, s)} / {stage_seconds(r['events'], 2, s)}" for s in GEAR_STAGES]
-                print(f"| {example} | {label} | {r['wall_s']:.1f} | {r['peak_gb']:.1f} | " + " | ".join(cells) + " |",
+                estimate = "—" if r["estimate_gb"] is None else f"{r['estimate_gb']:.1f}"
+                print(f"| {example} | {label} | {r['wall_s']:.1f} | {r['peak_gb']:.1f} | {estimate} | " + " | ".join(cells) + " |",
                       flush=True)
 
 

@@ -154,11 +154,20 @@ fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth(
                     i + 1
                 );
                 let (mesh, material, dofs) = (&model.mesh.mesh, &model.material, &model.dofs);
-                let direct = global_attachment_modes(mesh, material, model.formulation, dofs, &chol, &grid.nodes, depth, |_| {})
-                    .unwrap();
-                let turned =
-                    global_attachment_modes_of_teeth(&model.mesh, material, model.formulation, dofs, &chol, &grid, depth, |_| {})
+                let direct =
+                    global_attachment_modes(mesh, material, model.formulation, dofs, &chol, &grid.nodes, depth, |_| {})
                         .unwrap();
+                let turned = global_attachment_modes_of_teeth(
+                    &model.mesh,
+                    material,
+                    model.formulation,
+                    dofs,
+                    &chol,
+                    &grid,
+                    depth,
+                    |_| {},
+                )
+                .unwrap();
                 let scale = (0..direct.ncols())
                     .flat_map(|j| (0..direct.nrows()).map(move |r| (r, j)))
                     .map(|(r, j)| direct[(r, j)].abs())

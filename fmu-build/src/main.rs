@@ -104,6 +104,12 @@ struct RomOptions {
     /// quasi-static.
     #[arg(long, value_enum)]
     dynamics: Option<DynamicsChoice>,
+    /// The memory the build may take (GB). The build estimates its peak once the gears are
+    /// meshed, before the FE stage: above this it builds the gears one after the other, and
+    /// refuses, with the figure, what will not fit that way either. Default: the machine's
+    /// available memory (`MemAvailable`).
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_number)]
+    memory_limit_gb: Option<f64>,
 }
 
 /// A count in [LO, HI] (a value outside is refused with the range, before any work).
@@ -978,6 +984,7 @@ fn build_rom(
         },
         lumped_mesh_law,
         contact,
+        memory_limit_bytes: rom.memory_limit_gb.map(|gb| gb * 1e9),
         ..Default::default()
     };
     // The reference model: what the paper ran (RK4, every coordinate dynamic).

@@ -98,7 +98,8 @@ impl DofMap {
             }
             col_ptr.push(row_idx.len());
         }
-        let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(self.n_free, self.n_free, col_ptr, None, row_idx);
+        let symbolic =
+            faer::sparse::SymbolicSparseColMat::new_checked(self.n_free, self.n_free, col_ptr, None, row_idx);
         SparseColMat::new(symbolic, values)
     }
 }
@@ -174,6 +175,30 @@ pub struct Cholesky {
 /// Right-hand sides per block in `solve_block` (at most).
 pub const SOLVE_BLOCK: usize = 64;
 
+/// A Cholesky factorization's symbolic part, before the numeric one (`Cholesky::analyse`).
+pub struct CholeskyAnalysis(Arc<SymbolicCholesky<usize>>);
+
+impl CholeskyAnalysis {
+    /// Non-zeros the factor L will have.
+    pub fn factor_nnz(&self) -> usize {
+        self.0.len_val()
+    }
+
+    /// Work space (bytes) the numeric factorization takes besides the factor, LLᵀ or LDLᵀ
+    /// whichever is larger (the Sturm check's LDLᵀ runs on this analysis too).
+    pub fn factorization_scratch_bytes(&self) -> usize {
+        let par = get_global_parallelism();
+        let llt = self.0.factorize_numeric_llt_scratch::<f64>(par, Default::default()).size_bytes();
+        let ldlt = self.0.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()).size_bytes();
+        llt.max(ldlt)
+    }
+
+    /// The numeric factorization of K (the matrix this was analysed on, or one of its pattern).
+    pub fn factorize(self, k: &SparseColMat<usize, f64>) -> Result<Cholesky, String> {
+        Cholesky::numeric(self.0, k)
+    }
+}
+
 impl Cholesky {
     /// Factorizes K with the AMD ordering.
     pub fn new(k: &SparseColMat<usize, f64>) -> Result<Self, String> {
@@ -182,13 +207,19 @@ impl Cholesky {
 
     /// Factorizes K with a given fill-reducing ordering (e.g. nested dissection), AMD if `None`.
     pub fn with_ordering(k: &SparseColMat<usize, f64>, ordering: Option<&Ordering>) -> Result<Self, String> {
+        Self::analyse(k, ordering)?.factorize(k)
+    }
+
+    /// The symbolic analysis of K alone (ordering, elimination tree, supernodes): the factor's
+    /// size before any of it is allocated.
+    pub fn analyse(k: &SparseColMat<usize, f64>, ordering: Option<&Ordering>) -> Result<CholeskyAnalysis, String> {
         let ord = match ordering {
             Some(o) => SymmetricOrdering::Custom(PermRef::new_checked(&o.forward, &o.inverse, k.nrows())),
             None => SymmetricOrdering::Amd,
         };
         let symbolic = factorize_symbolic_cholesky(k.symbolic(), Side::Lower, ord, Default::default())
             .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
-        Self::numeric(Arc::new(symbolic), k)
+        Ok(CholeskyAnalysis(Arc::new(symbolic)))
     }
 
     /// Factorizes another matrix with the same sparsity pattern, reusing this symbolic analysis

@@ -40,6 +40,12 @@ impl ClampedGear {
         super::assembly::Cholesky::with_ordering(&self.stiffness, Some(&self.ordering()?))
     }
 
+    /// The symbolic analysis of K with the nested-dissection ordering: the factor's size, before
+    /// the numeric factorization (`CholeskyAnalysis::factorize`) allocates it.
+    pub fn analyse(&self) -> Result<super::assembly::CholeskyAnalysis, String> {
+        super::assembly::Cholesky::analyse(&self.stiffness, Some(&self.ordering()?))
+    }
+
     /// The consistent mass matrix over the same free DOFs.
     pub fn mass(&self) -> SparseColMat<usize, f64> {
         assembly::mass(&self.mesh.mesh, &self.material, &self.dofs)

@@ -71,6 +71,12 @@ pub fn lowest_modes(
 /// the steps.
 const KRYLOV_BLOCK: usize = 8;
 
+/// Columns reserved for the Krylov space (each of V, KV and MV) when `count` modes of an
+/// n-DOF model are sought: what the build's memory estimate counts.
+pub fn krylov_capacity(count: usize, n: usize) -> usize {
+    (6 * count + 4 * KRYLOV_BLOCK.min(n)).min(n)
+}
+
 /// As [`lowest_modes`], with K's Cholesky factor supplied (e.g. nested-dissection ordered).
 ///
 /// Block shift-invert Lanczos with full reorthogonalization: the space V grows by one block
@@ -111,7 +117,7 @@ pub fn lowest_modes_factored(
     // The space V (M-orthonormal columns), with KV and MV kept for the residuals, and the
     // projection VᵀKV grown by one block row and column per step.
     let (mut v, mut kv, mut mv) = (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(n, 0));
-    let capacity = (6 * count + 4 * b).min(n);
+    let capacity = krylov_capacity(count, n);
     for a in [&mut v, &mut kv, &mut mv] {
         a.reserve(n, capacity);
     }

@@ -233,7 +233,16 @@ pub fn global_attachment_modes_of_teeth(
 ) -> Result<faer::Mat<f64>, String> {
     use rayon::prelude::*;
     let solve_whole = |progress| {
-        global_attachment_modes(&gear.mesh, material, formulation, dofs, total_stiffness, &flank.nodes, depth_m, progress)
+        global_attachment_modes(
+            &gear.mesh,
+            material,
+            formulation,
+            dofs,
+            total_stiffness,
+            &flank.nodes,
+            depth_m,
+            progress,
+        )
     };
     let Some(turns) = teeth_from_the_first(gear, flank) else {
         return solve_whole(progress);
@@ -253,7 +262,8 @@ pub fn global_attachment_modes_of_teeth(
     psi.as_mut().par_col_chunks_mut(1).enumerate().for_each(|(column, mut out)| {
         let (slot, j) = (column / per_tooth, column % per_tooth);
         let free: Vec<f64> = (0..dofs.n_free).map(|i| first[(i, j)]).collect();
-        let turned = if slot == 0 { dofs.expand(&free) } else { gear.rotate_by_teeth(&dofs.expand(&free), -turns[slot]) };
+        let turned =
+            if slot == 0 { dofs.expand(&free) } else { gear.rotate_by_teeth(&dofs.expand(&free), -turns[slot]) };
         for (d, slot) in dofs.free.iter().enumerate() {
             if let Some(i) = slot {
                 out[(*i, 0)] = turned[d];
@@ -266,7 +276,10 @@ pub fn global_attachment_modes_of_teeth(
 /// The teeth each tooth of a flank grid lies on from its first (mod z), where every tooth's nodes
 /// and normals are the first tooth's turned on by that many teeth; `None` where they are not
 /// (or the grid has one tooth): then nothing is gained by turning.
-pub fn teeth_from_the_first(gear: &crate::fe::gear_mesh::GearMesh, flank: &super::flank::FlankGrid) -> Option<Vec<i64>> {
+pub fn teeth_from_the_first(
+    gear: &crate::fe::gear_mesh::GearMesh,
+    flank: &super::flank::FlankGrid,
+) -> Option<Vec<i64>> {
     let teeth = flank.teeth.len();
     if teeth < 2 || flank.len() % teeth != 0 {
         return None;

@@ -14,6 +14,7 @@
 //! onto the gear by the mesh's own half turn (`GearMesh::half_turn_about_x`): no second static
 //! solver, no second reduction.
 
+use super::build_memory::{BuildMemory, GearSizes, Schedule};
 use super::flank::FlankGrid;
 use super::reductor::{pmor_hertz, standard_cms, Reconstructor, ReducedGear};
 use super::sharing;
@@ -65,6 +66,9 @@ pub struct DynamicBuildOptions {
     /// Whether to tabulate the lumped model's mesh law from this build's statics too
     /// (`rom::static_mesh_law`; no second reduction).
     pub lumped_mesh_law: bool,
+    /// The memory the build may take (bytes); `None`: what the machine has available
+    /// (`rom::build_memory::available_bytes`).
+    pub memory_limit_bytes: Option<f64>,
 }
 
 impl Default for DynamicBuildOptions {
@@ -96,6 +100,7 @@ impl Default for DynamicBuildOptions {
             // `the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step`).
             condensation: Condensation::QuasiStatic,
             lumped_mesh_law: false,
+            memory_limit_bytes: None,
         }
     }
 }
@@ -123,6 +128,9 @@ pub struct DynamicBuildReport {
     pub step: IntegratorStep,
     /// The lumped model's drive-flank law and its tooth-pair counts, where asked for.
     pub lumped_mesh_law: Option<super::static_mesh_law::StaticMeshLaw>,
+    /// The peak memory estimated before the FE stage, and the schedule it chose.
+    pub memory: BuildMemory,
+    pub schedule: Schedule,
 }
 
 /// `f` applied to the reduced pair with the build's modal damping and integrator, no added
@@ -202,6 +210,28 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// One gear before its factorization: what the memory estimate is made from.
+struct PreparedGear {
+    model: ClampedGear,
+    analysis: crate::fe::assembly::CholeskyAnalysis,
+    grid: FlankGrid,
+    sizes: GearSizes,
+}
+
+/// Nodal fields the shapes stage holds at its fullest, for n_θ samples of n_t shapes and n_k
+/// modes: while the stiffness products are formed, the cleaned samples, the stored ones (n_θ + 5)
+/// and four arrays of stored size (the free-DOF copies, the product's input and output, its
+/// columns); while the Gram products are formed, the cleaned and stored samples, and the fields
+/// [Gx | Φ | S] with their mass products; while cleaning, the raw samples and two cleaned copies.
+fn shape_fields(n_theta: usize, n_t: usize, n_k: usize) -> usize {
+    let stored = (n_theta + 5) * n_t;
+    let fields = 1 + n_k + stored;
+    let stiffness_products = n_theta * n_t + stored + 4 * stored;
+    let gram = n_theta * n_t + stored + 2 * fields;
+    let cleaning = (n_theta + 1) * n_t + 2 * n_theta * n_t + 4 * n_t;
+    stiffness_products.max(gram).max(cleaning)
+}
+
 /// One gear's FE side during the build.
 struct GearFe {
     model: ClampedGear,
@@ -229,28 +259,42 @@ pub fn build_dynamic_model(
         return Err("rom_torques_nm must be one or more positive torques".into());
     }
     let place = PairPlacement::new(pair);
-    // The two gears' FE models, attachment modes and eigenmodes are independent: built side by
-    // side, the sequential parts of one (assembly, the Sturm check's simplicial LDLᵀ) overlap
-    // the other's parallel ones.
-    let gear_fe = |i: usize, gear: &crate::gear::Gear| -> Result<GearFe, String> {
+    // The two gears' FE models, eigenmodes and attachment modes are independent: built side by
+    // side, the sequential parts of one (assembly, the partial models' small factorizations)
+    // overlap the other's parallel ones.
+    // Each gear meshed, assembled, its factor analysed and its loadable flank found: every size
+    // the memory estimate needs, before anything large is allocated.
+    let prepare = |i: usize, gear: &crate::gear::Gear| -> Result<PreparedGear, String> {
         progress(format!("gear {}: FE model", i + 1));
         let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
-        let factor = model.factorize()?;
+        let analysis = model.analyse()?;
         let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
-        let (reduced, reconstructor, n_sv) = match options.contact {
-            FlankContact::Hertz => {
-                progress(format!("gear {}: global attachment modes ({} flank nodes)", i + 1, grid.len()));
-                let (reduced, reconstructor, report) =
-                    pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
-                (reduced, reconstructor, report.n_sv)
-            }
-            FlankContact::Penalty { .. } => {
-                progress(format!("gear {}: standard CMS attachment modes ({} flank nodes)", i + 1, grid.len()));
-                let n = grid.len();
-                let (reduced, reconstructor) = standard_cms(&model, &factor, grid);
-                (reduced, reconstructor, n)
-            }
+        let solved_columns = match (options.contact, super::attachment::teeth_from_the_first(&model.mesh, &grid)) {
+            (FlankContact::Hertz, Some(_)) => grid.len() / grid.teeth.len(),
+            _ => grid.len(),
         };
+        let n = model.dofs.n_free;
+        let probed_modes = options.modes + 6;
+        // The shapes stage's fields at its fullest, nodal fields each (`shape_fields` below).
+        let (n_theta, n_t) = (options.angles, 2 * (options.rom_torques_nm.len() + options.sharing_shapes));
+        let sizes = GearSizes {
+            free_dofs: n,
+            all_dofs: model.dofs.free.len(),
+            stiffness_nnz: model.stiffness.compute_nnz(),
+            factor_nnz: analysis.factor_nnz(),
+            factorization_scratch_bytes: analysis.factorization_scratch_bytes(),
+            attachment_columns: grid.len(),
+            solved_columns,
+            krylov_columns: eigen::krylov_capacity(probed_modes, n),
+            probed_modes,
+            shape_fields: shape_fields(n_theta, n_t, probed_modes),
+        };
+        Ok(PreparedGear { model, analysis, grid, sizes })
+    };
+    let gear_fe = |i: usize, prepared: PreparedGear| -> Result<GearFe, String> {
+        let PreparedGear { model, analysis, grid, sizes } = prepared;
+        let solved_columns = sizes.solved_columns;
+        let factor = analysis.factorize(&model.stiffness)?;
         progress(format!("gear {}: eigenmodes", i + 1));
         let n_nodes = model.mesh.mesh.nodes.len();
         let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
@@ -269,6 +313,29 @@ pub fn build_dynamic_model(
         if n_k == probe {
             return Err(format!("gear {}: no spectral gap found after {} modes", i + 1, options.modes));
         }
+        // The eigen stage's arrays (the Krylov space, the Sturm LDLᵀ) are freed before ψ, the
+        // attachment stage's n_FE × n_c array, is allocated: the two never add up.
+        drop(mass);
+        let (reduced, reconstructor, n_sv) = match options.contact {
+            FlankContact::Hertz => {
+                progress(format!(
+                    "gear {}: global attachment modes ({} flank nodes on {} teeth, {} solved)",
+                    i + 1,
+                    grid.len(),
+                    grid.teeth.len(),
+                    solved_columns
+                ));
+                let (reduced, reconstructor, report) =
+                    pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
+                (reduced, reconstructor, report.n_sv)
+            }
+            FlankContact::Penalty { .. } => {
+                progress(format!("gear {}: standard CMS attachment modes ({} flank nodes)", i + 1, grid.len()));
+                let n = grid.len();
+                let (reduced, reconstructor) = standard_cms(&model, &factor, grid);
+                (reduced, reconstructor, n)
+            }
+        };
         let phi: Vec<Vec<f64>> = (0..n_k)
             .map(|c| model.dofs.expand(&(0..model.dofs.n_free).map(|r| modes.vectors[(r, c)]).collect::<Vec<_>>()))
             .collect();
@@ -285,8 +352,33 @@ pub fn build_dynamic_model(
             n_sv,
         })
     };
-    let (fe1, fe2) = rayon::join(|| gear_fe(0, &pair.gear1), || gear_fe(1, &pair.gear2));
-    let fe = [fe1?, fe2?];
+    let (prepared1, prepared2) = rayon::join(|| prepare(0, &pair.gear1), || prepare(1, &pair.gear2));
+    let (prepared1, prepared2) = (prepared1?, prepared2?);
+    let memory = BuildMemory { gears: [prepared1.sizes.memory(), prepared2.sizes.memory()] };
+    let limit = options.memory_limit_bytes.or_else(super::build_memory::available_bytes);
+    let schedule = match limit {
+        Some(limit) => memory.schedule(limit)?,
+        None => Schedule::SideBySide,
+    };
+    progress(format!(
+        "estimated peak {:.1} GB ({}; {} GB available)",
+        memory.peak(schedule) / 1e9,
+        match schedule {
+            Schedule::SideBySide => "gears side by side",
+            Schedule::OneAfterTheOther => "gears one after the other: side by side would need more than is available",
+        },
+        limit.map_or("unknown".into(), |l| format!("{:.1}", l / 1e9))
+    ));
+    let fe = match schedule {
+        Schedule::SideBySide => {
+            let (fe1, fe2) = rayon::join(|| gear_fe(0, prepared1), || gear_fe(1, prepared2));
+            [fe1?, fe2?]
+        }
+        Schedule::OneAfterTheOther => {
+            let fe1 = gear_fe(0, prepared1)?;
+            [fe1, gear_fe(1, prepared2)?]
+        }
+    };
 
     // Static analyses over one mesh cycle (and one more sample, one pitch on, for the closure
     // check), for each torque.
@@ -358,18 +450,24 @@ pub fn build_dynamic_model(
         let turned = fe[i].model.mesh.rotate_by_teeth(field, wraps + (i == 0) as i64);
         GearMesh::half_turn_field(half_turn, &turned)
     };
-    let coast_field = |i: usize, t: usize, s: usize, half_turn: &[usize]| -> Vec<f64> {
-        let (wraps, c) = &coast_cases[(i * options.rom_torques_nm.len() + t) * (n_theta + 1) + s];
-        turn_back(i, *wraps, &fe[i].reconstructor.displacement(&c.reduced[i]), half_turn)
-    };
-    // The load-sharing shapes (`rom::sharing`), on the drive flanks at gear 2's sample angle and
-    // on the coast flanks through the same half turn as the coast statics.
-    let sharing_field = |i: usize, theta2: f64, order: usize| -> Vec<f64> {
-        fe[i].reconstructor.displacement(&sharing::sharing_load(&place, &fe[i].reduced, i, theta2, order))
-    };
-    let coast_sharing_field = |i: usize, s: usize, order: usize, half_turn: &[usize]| -> Vec<f64> {
-        let (wraps, theta2) = half_turned_pose(i, s);
-        turn_back(i, wraps, &sharing_field(i, theta2, order), half_turn)
+    // Gear i's raw shapes of sample s, as reduced coordinates and the whole teeth a coast
+    // shape's field is turned back by (`None`: a drive shape, the field as it is): on the drive
+    // flanks one per torque, then the load-sharing shapes (`rom::sharing`) at gear 2's sample
+    // angle; then the same on the coast flanks, through the half turn of the coast statics.
+    let raw_coordinates = |i: usize, s: usize| -> Vec<(Vec<f64>, Option<i64>)> {
+        let n_torques = options.rom_torques_nm.len();
+        let theta2 = pitch2 * s as f64 / n_theta as f64;
+        let (wraps, coast_theta2) = half_turned_pose(i, s);
+        let sharing = |theta2: f64, order: usize| sharing::sharing_load(&place, &fe[i].reduced, i, theta2, order);
+        let orders = 1..=options.sharing_shapes;
+        let drive = (0..n_torques).map(|t| (case(t, s).reduced[i].clone(), None));
+        let drive_sharing = orders.clone().map(|m| (sharing(theta2, m), None));
+        let coast = (0..n_torques).map(|t| {
+            let (wraps, c) = &coast_cases[(i * n_torques + t) * (n_theta + 1) + s];
+            (c.reduced[i].clone(), Some(*wraps))
+        });
+        let coast_sharing = orders.map(|m| (sharing(coast_theta2, m), Some(wraps)));
+        drive.chain(drive_sharing).chain(coast).chain(coast_sharing).collect()
     };
     let ste_m: Vec<Vec<f64>> =
         (0..options.rom_torques_nm.len()).map(|t| (0..n_theta).map(|s| case(t, s).ste_m).collect()).collect();
@@ -392,18 +490,21 @@ pub fn build_dynamic_model(
         // Raw shapes per sample (0..=n_θ) as full nodal fields: on the drive flanks one per
         // torque, then the sharing shapes; then the same on the coast flanks.
         let half_turn = gm.half_turn_about_x()?;
-        let orders = 1..=options.sharing_shapes;
-        let raw: Vec<Vec<Vec<f64>>> = (0..=n_theta)
+        // All samples' fields from one product with the reduction basis (it is read once, not
+        // once per field), then the coast fields turned back onto the gear.
+        let coordinates: Vec<(Vec<f64>, Option<i64>)> = (0..=n_theta).flat_map(|s| raw_coordinates(i, s)).collect();
+        let q: Vec<&[f64]> = coordinates.iter().map(|(q, _)| q.as_slice()).collect();
+        let displacements = g.reconstructor.displacements(&q);
+        let fields: Vec<Vec<f64>> = displacements
             .into_par_iter()
-            .map(|s| {
-                let theta2 = pitch2 * s as f64 / n_theta as f64;
-                let drive = (0..n_torques).map(|t| g.reconstructor.displacement(&case(t, s).reduced[i]));
-                let drive_sharing = orders.clone().map(|m| sharing_field(i, theta2, m));
-                let coast = (0..n_torques).map(|t| coast_field(i, t, s, &half_turn));
-                let coast_sharing = orders.clone().map(|m| coast_sharing_field(i, s, m, &half_turn));
-                drive.chain(drive_sharing).chain(coast).chain(coast_sharing).collect()
+            .zip(coordinates.par_iter())
+            .map(|(field, (_, wraps))| match wraps {
+                None => field,
+                Some(wraps) => turn_back(i, *wraps, &field, &half_turn),
             })
             .collect();
+        let mut fields = fields.into_iter();
+        let raw: Vec<Vec<Vec<f64>>> = (0..=n_theta).map(|_| fields.by_ref().take(n_t).collect()).collect();
         // Residual against Φ (Eq. 14), then each scaled to unit modal mass. The torque levels of
         // one sample are NOT orthogonalized against each other: their difference is a small,
         // ill-determined direction whose sign and orientation jump between samples, and an
@@ -433,8 +534,7 @@ pub fn build_dynamic_model(
             }
             (residual, m_residual)
         };
-        let (base, m_base): (Vec<Vec<Vec<f64>>>, Vec<Vec<Vec<f64>>>) =
-            raw[..n_theta].iter().map(|f| clean(f)).unzip();
+        let (base, m_base): (Vec<Vec<Vec<f64>>>, Vec<Vec<Vec<f64>>>) = raw[..n_theta].iter().map(|f| clean(f)).unzip();
         // The shapes of one sample must span n_t directions. Several torque levels often do
         // not: the global contact shapes of PMOR-Hertz are nearly proportional to the load (the
         // nonlinear local part is the analytic Hertz law), so two levels are the same direction
@@ -456,7 +556,9 @@ pub fn build_dynamic_model(
             }
         }
         // Closure check: the sample one pitch on against P·S₀, every column.
+        drop(m_base);
         let (one_on, _) = clean(&raw[n_theta]);
+        drop(raw);
         let differences: Vec<Vec<f64>> = (0..n_t)
             .map(|column| {
                 let p_s0 = gm.rotate_by_teeth(&base[0][column], 1);
@@ -480,12 +582,9 @@ pub fn build_dynamic_model(
         let x: Vec<f64> = gm.mesh.nodes.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let n_k = g.phi.len();
         let n_a = stored.len();
-        let mut fields: Vec<Vec<f64>> = vec![generator(&x)];
-        fields.extend(g.phi.iter().cloned());
-        for sample in &stored {
-            fields.extend(sample.iter().cloned());
-        }
-        let f = from_columns(&fields);
+        let gx = generator(&x);
+        let fields: Vec<&Vec<f64>> = std::iter::once(&gx).chain(&g.phi).chain(stored.iter().flatten()).collect();
+        let f = Mat::from_fn(gx.len(), fields.len(), |r, c| fields[c][r]);
         let mut mf = Mat::zeros(f.nrows(), f.ncols());
         sparse_dense_matmul(
             mf.as_mut(),
@@ -496,6 +595,7 @@ pub fn build_dynamic_model(
             faer::get_global_parallelism(),
         );
         let gram = f.transpose() * &mf;
+        drop((f, mf));
         let sc = |a: usize, t: usize| 1 + n_k + a * n_t + t;
         let phic = |j: usize| 1 + j;
         // Stiffness products of the shapes (free DOFs; the bore does not move).
@@ -549,8 +649,7 @@ pub fn build_dynamic_model(
                 v
             })
             .collect();
-        invariance[i] =
-            outside.iter().zip(m_times_all(&outside)).map(|(v, mv)| dot(&mv, v).sqrt()).fold(0.0, f64::max);
+        invariance[i] = outside.iter().zip(m_times_all(&outside)).map(|(v, mv)| dot(&mv, v).sqrt()).fold(0.0, f64::max);
         // Flank rows for the online contact: the teeth that can mesh, with a margin of two pairs
         // on each side (an anchor may lag its angle by a step near a pitch boundary); three for
         // the coast flanks, whose reference pitch is the half turn of another interval of θ₂.
@@ -633,6 +732,8 @@ pub fn build_dynamic_model(
         shape_gram_ratio: gram_ratio,
         ste_m,
         n_sv: [fe[0].n_sv, fe[1].n_sv],
+        memory,
+        schedule,
     };
     Ok((model, report))
 }

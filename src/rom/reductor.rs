@@ -99,6 +99,18 @@ impl Reconstructor {
         let free = &self.basis * faer::ColRef::from_slice(q);
         self.dofs.expand(free.try_as_col_major().expect("an owned column is contiguous").as_slice())
     }
+
+    /// The FE displacement fields of several reduced coordinate vectors: one product with the
+    /// basis, which is then read once rather than once per field.
+    pub fn displacements(&self, qs: &[&[f64]]) -> Vec<Vec<f64>> {
+        let q = Mat::from_fn(self.basis.ncols(), qs.len(), |r, c| qs[c][r]);
+        let free = &self.basis * &q;
+        (0..qs.len())
+            .map(|c| {
+                self.dofs.expand(free.col(c).try_as_col_major().expect("an owned column is contiguous").as_slice())
+            })
+            .collect()
+    }
 }
 
 /// What the SVD kept (Algorithm 1).

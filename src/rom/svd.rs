@@ -10,9 +10,9 @@
 //! overwrites ψ a block of rows at a time.
 
 use faer::linalg::matmul::matmul;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMat;
-use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{get_global_parallelism, Accum, Mat, MatRef};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -28,7 +28,7 @@ pub struct Compression {
 
 /// Columns of the basis per sparse product in [`projected_stiffness`]: K·B is held for this
 /// many columns only (n_FE × 64 instead of n_FE × n_c).
-const PROJECTION_BLOCK: usize = 64;
+pub const PROJECTION_BLOCK: usize = 64;
 
 /// Rows per block of [`right_multiply_in_place`].
 const ROW_BLOCK: usize = 4096;
