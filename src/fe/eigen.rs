@@ -10,9 +10,8 @@ use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
-use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{get_global_parallelism, Accum, Mat, Side};
+use faer::{get_global_parallelism, Mat, Side};
 use nalgebra::DMatrix;
 
 #[derive(Debug, Clone)]
@@ -38,9 +37,7 @@ impl Modes {
 
 /// A·X for sparse A and a dense block X (faer's sparse × dense product, parallel).
 fn mat_mul_sparse(a: &SparseColMat<usize, f64>, x: &Mat<f64>) -> Mat<f64> {
-    let mut y = Mat::zeros(a.nrows(), x.ncols());
-    sparse_dense_matmul(y.as_mut(), Accum::Replace, a.as_ref(), x.as_ref(), 1.0, get_global_parallelism());
-    y
+    crate::fe::assembly::symmetric_times_block(a, x.as_ref())
 }
 
 /// AᵀB (q×q) by faer's dense product, copied into nalgebra for the small eigenproblem.

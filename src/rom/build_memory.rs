@@ -55,8 +55,10 @@ impl GearSizes {
         // Eigen stage: the free mass, the Krylov space (V, KV, MV), then — the space freed — the
         // Sturm LDLᵀ, as large as L, with its work space.
         let eigen = stiffness + modes + (3.0 * F64 * n * self.krylov_columns as f64).max(factor + scratch);
-        // Attachment stage: ψ, the solved tooth's columns, one block of K·ψ.
-        let attachment = modes + basis + F64 * n * (self.solved_columns as f64 + super::svd::PROJECTION_BLOCK as f64);
+        // Attachment stage: ψ, the solved tooth's columns, one block of K·ψ (with the two
+        // transposes of `assembly::symmetric_times_block`).
+        let attachment =
+            modes + basis + F64 * n * (self.solved_columns as f64 + 3.0 * super::svd::PROJECTION_BLOCK as f64);
         GearMemory {
             fe_stage_peak: stiffness + full_mass + factor + eigen.max(attachment).max(scratch),
             kept: stiffness + full_mass + basis + F64 * big_n * self.probed_modes as f64,

@@ -33,8 +33,7 @@ use crate::fe::eigen;
 use crate::fe::gear_mesh::{GearMesh, MeshSpec};
 use crate::fe::hex8::Formulation;
 use crate::gear::GearPair;
-use faer::sparse::linalg::matmul::sparse_dense_matmul;
-use faer::{Accum, Mat};
+use faer::Mat;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -200,9 +199,7 @@ fn sparse_times_fields(a: &faer::sparse::SparseColMat<usize, f64>, fields: &[Vec
     if fields.is_empty() {
         return Vec::new();
     }
-    let f = from_columns(fields);
-    let mut af = Mat::zeros(a.nrows(), f.ncols());
-    sparse_dense_matmul(af.as_mut(), Accum::Replace, a.as_ref(), f.as_ref(), 1.0, faer::get_global_parallelism());
+    let af = assembly::symmetric_times_block(a, from_columns(fields).as_ref());
     (0..af.ncols()).map(|j| (0..af.nrows()).map(|i| af[(i, j)]).collect()).collect()
 }
 
@@ -219,17 +216,21 @@ struct PreparedGear {
 }
 
 /// Nodal fields the shapes stage holds at its fullest, for n_θ samples of n_t shapes and n_k
-/// modes: while the stiffness products are formed, the cleaned samples, the stored ones (n_θ + 5)
-/// and four arrays of stored size (the free-DOF copies, the product's input and output, its
-/// columns); while the Gram products are formed, the cleaned and stored samples, and the fields
-/// [Gx | Φ | S] with their mass products; while cleaning, the raw samples and two cleaned copies.
+/// modes. A sparse block product (`assembly::symmetric_times_block`) holds its input, its
+/// transpose, its output's transpose and its output. While the stiffness products are formed:
+/// the cleaned samples, the stored ones (n_θ + 5), their free-DOF copies and a product of that
+/// size with the columns copied out; while the Gram products are formed: the cleaned and stored
+/// samples and a product over the fields [Gx | Φ | S]; while the raw samples are formed: three
+/// copies of them (the product with the basis, expanded, turned); while cleaning: the raw
+/// samples, two cleaned copies and one sample's product.
 fn shape_fields(n_theta: usize, n_t: usize, n_k: usize) -> usize {
     let stored = (n_theta + 5) * n_t;
     let fields = 1 + n_k + stored;
-    let stiffness_products = n_theta * n_t + stored + 4 * stored;
-    let gram = n_theta * n_t + stored + 2 * fields;
-    let cleaning = (n_theta + 1) * n_t + 2 * n_theta * n_t + 4 * n_t;
-    stiffness_products.max(gram).max(cleaning)
+    let stiffness_products = n_theta * n_t + stored + 6 * stored;
+    let gram = n_theta * n_t + stored + 4 * fields;
+    let raw = 3 * (n_theta + 1) * n_t;
+    let cleaning = (n_theta + 1) * n_t + 2 * n_theta * n_t + 5 * n_t;
+    stiffness_products.max(gram).max(raw).max(cleaning)
 }
 
 /// One gear's FE side during the build.
@@ -585,15 +586,7 @@ pub fn build_dynamic_model(
         let gx = generator(&x);
         let fields: Vec<&Vec<f64>> = std::iter::once(&gx).chain(&g.phi).chain(stored.iter().flatten()).collect();
         let f = Mat::from_fn(gx.len(), fields.len(), |r, c| fields[c][r]);
-        let mut mf = Mat::zeros(f.nrows(), f.ncols());
-        sparse_dense_matmul(
-            mf.as_mut(),
-            Accum::Replace,
-            g.mass_full.as_ref(),
-            f.as_ref(),
-            1.0,
-            faer::get_global_parallelism(),
-        );
+        let mf = assembly::symmetric_times_block(&g.mass_full, f.as_ref());
         let gram = f.transpose() * &mf;
         drop((f, mf));
         let sc = |a: usize, t: usize| 1 + n_k + a * n_t + t;

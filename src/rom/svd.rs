@@ -9,9 +9,9 @@
 //! nothing here makes a second one: K·ψ is formed a block of columns at a time, and ψ·Ũ
 //! overwrites ψ a block of rows at a time.
 
+use crate::fe::assembly::symmetric_times_block;
 use faer::linalg::matmul::matmul;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMat;
 use faer::{get_global_parallelism, Accum, Mat, MatRef};
 use nalgebra::DMatrix;
@@ -39,12 +39,11 @@ pub fn projected_stiffness(k: &SparseColMat<usize, f64>, basis: &Mat<f64>) -> Ma
     let (n, m) = (basis.nrows(), basis.ncols());
     let par = get_global_parallelism();
     let mut kr = Mat::zeros(m, m);
-    let mut kb = Mat::zeros(n, PROJECTION_BLOCK.min(m));
+    assert_eq!(k.nrows(), n);
     for start in (0..m).step_by(PROJECTION_BLOCK) {
         let width = PROJECTION_BLOCK.min(m - start);
-        let mut kb = kb.as_mut().subcols_mut(0, width);
-        sparse_dense_matmul(kb.rb_mut(), Accum::Replace, k.as_ref(), basis.as_ref().subcols(start, width), 1.0, par);
-        matmul(kr.as_mut().subcols_mut(start, width), Accum::Replace, basis.transpose(), kb.rb(), 1.0, par);
+        let kb = symmetric_times_block(k, basis.as_ref().subcols(start, width));
+        matmul(kr.as_mut().subcols_mut(start, width), Accum::Replace, basis.transpose(), kb.as_ref(), 1.0, par);
     }
     Mat::from_fn(m, m, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]))
 }
