@@ -17,6 +17,8 @@ pub struct GearSizes {
     /// numeric factorization's work space (bytes).
     pub factor_nnz: usize,
     pub factorization_scratch_bytes: usize,
+    /// Hexahedra: an assembly holds 24 × 24 triplets of each, twice (per element, then flat).
+    pub elements: usize,
     /// Columns of ψ (loadable flank nodes) and of those solved (one tooth's).
     pub attachment_columns: usize,
     pub solved_columns: usize,
@@ -50,6 +52,8 @@ impl GearSizes {
         let full_mass = stiffness * big_n / n;
         let factor = F64 * self.factor_nnz as f64;
         let scratch = self.factorization_scratch_bytes as f64;
+        // The full mass is assembled with K and L held: its triplets (row, column, value).
+        let assembly = 2.0 * 24.0 * 576.0 * self.elements as f64;
         let basis = F64 * n * self.attachment_columns as f64;
         let modes = F64 * n * self.probed_modes as f64;
         // Eigen stage: the free mass, the Krylov space (V, KV, MV), then — the space freed — the
@@ -60,7 +64,7 @@ impl GearSizes {
         let attachment =
             modes + basis + F64 * n * (self.solved_columns as f64 + 3.0 * super::svd::PROJECTION_BLOCK as f64);
         GearMemory {
-            fe_stage_peak: stiffness + full_mass + factor + eigen.max(attachment).max(scratch),
+            fe_stage_peak: stiffness + full_mass + factor + eigen.max(attachment).max(scratch).max(assembly),
             kept: stiffness + full_mass + basis + F64 * big_n * self.probed_modes as f64,
             shapes_stage: F64 * big_n * self.shape_fields as f64,
         }
@@ -135,6 +139,7 @@ mod tests {
             stiffness_nnz: 8_000_000 * scale,
             factor_nnz: 40_000_000 * scale,
             factorization_scratch_bytes: 50_000_000 * scale,
+            elements: 30_000 * scale,
             attachment_columns: 400,
             solved_columns: 100,
             krylov_columns: 188,

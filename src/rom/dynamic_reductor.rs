@@ -284,6 +284,7 @@ pub fn build_dynamic_model(
             stiffness_nnz: model.stiffness.compute_nnz(),
             factor_nnz: analysis.factor_nnz(),
             factorization_scratch_bytes: analysis.factorization_scratch_bytes(),
+            elements: model.mesh.mesh.elements.len(),
             attachment_columns: grid.len(),
             solved_columns,
             krylov_columns: eigen::krylov_capacity(probed_modes, n),
