@@ -3,7 +3,7 @@
 //! under a cap on the block steps; residual norms reported; and a Sturm count — the negative
 //! pivots of an LDLᵀ of K − σM — proving that no eigenvalue below σ was missed (design §4.2).
 
-use super::assembly::Cholesky;
+use super::assembly::{symmetric_times_block, Cholesky};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
@@ -33,11 +33,6 @@ impl Modes {
     pub fn frequencies_hz(&self) -> Vec<f64> {
         self.eigenvalues.iter().map(|l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)).collect()
     }
-}
-
-/// A·X for sparse A and a dense block X (faer's sparse × dense product, parallel).
-fn mat_mul_sparse(a: &SparseColMat<usize, f64>, x: &Mat<f64>) -> Mat<f64> {
-    crate::fe::assembly::symmetric_times_block(a, x.as_ref())
 }
 
 /// AᵀB (q×q) by faer's dense product, copied into nalgebra for the small eigenproblem.
@@ -110,7 +105,7 @@ pub fn lowest_modes_factored(
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         }
     });
-    let mut mx = mat_mul_sparse(m, &x);
+    let mut mx = symmetric_times_block(m, x.as_ref());
     // The space V (M-orthonormal columns), with KV and MV kept for the residuals, and the
     // projection VᵀKV grown by one block row and column per step.
     let (mut v, mut kv, mut mv) = (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(n, 0));
@@ -132,7 +127,7 @@ pub fn lowest_modes_factored(
         if y.ncols() == 0 {
             break; // V is an invariant subspace: nothing new to add.
         }
-        let ky = mat_mul_sparse(k, &y);
+        let ky = symmetric_times_block(k, y.as_ref());
         let (old, new) = (v.ncols(), y.ncols());
         let cross = v.transpose() * &ky;
         let own = y.transpose() * &ky;
@@ -225,7 +220,7 @@ fn m_orthonormal_complement(
             y -= v * &c;
         }
     }
-    let mut my = mat_mul_sparse(m, &y);
+    let mut my = symmetric_times_block(m, y.as_ref());
     // The second normalization makes Y's own columns orthonormal to round-off.
     for _ in 0..2 {
         let g = gram(&y, &my);

@@ -260,9 +260,6 @@ pub fn build_dynamic_model(
         return Err("rom_torques_nm must be one or more positive torques".into());
     }
     let place = PairPlacement::new(pair);
-    // The two gears' FE models, eigenmodes and attachment modes are independent: built side by
-    // side, the sequential parts of one (assembly, the partial models' small factorizations)
-    // overlap the other's parallel ones.
     // Each gear meshed, assembled, its factor analysed and its loadable flank found: every size
     // the memory estimate needs, before anything large is allocated.
     let prepare = |i: usize, gear: &crate::gear::Gear| -> Result<PreparedGear, String> {
@@ -371,6 +368,9 @@ pub fn build_dynamic_model(
         },
         limit.map_or("unknown".into(), |l| format!("{:.1}", l / 1e9))
     ));
+    // The two gears' FE models, eigenmodes and attachment modes are independent: built side by
+    // side, the sequential parts of one (assembly, the partial models' small factorizations)
+    // overlap the other's parallel ones.
     let fe = match schedule {
         Schedule::SideBySide => {
             let (fe1, fe2) = rayon::join(|| gear_fe(0, prepared1), || gear_fe(1, prepared2));

@@ -96,8 +96,7 @@ pub struct Reconstructor {
 impl Reconstructor {
     /// The FE displacement field (all DOFs, node-major) of reduced coordinates q.
     pub fn displacement(&self, q: &[f64]) -> Vec<f64> {
-        let free = &self.basis * faer::ColRef::from_slice(q);
-        self.dofs.expand(free.try_as_col_major().expect("an owned column is contiguous").as_slice())
+        self.displacements(&[q]).remove(0)
     }
 
     /// The FE displacement fields of several reduced coordinate vectors: one product with the
