@@ -314,6 +314,30 @@ impl Cholesky {
     }
 }
 
+/// K X = B for blocks of right-hand sides: the whole gear's Cholesky factor, or the gear by
+/// harmonics (`cyclic_symmetry::FactoredCyclicGear`), whichever the build factorized.
+pub trait LinearSolve: Sync {
+    /// Solves in place, one column per right-hand side.
+    fn solve_block(&self, b: &mut Mat<f64>);
+    /// The number of equations.
+    fn dimension(&self) -> usize;
+    /// Solves K x = f.
+    fn solve(&self, f: &[f64]) -> Vec<f64> {
+        let mut b = Mat::from_fn(self.dimension(), 1, |i, _| f[i]);
+        self.solve_block(&mut b);
+        (0..self.dimension()).map(|i| b[(i, 0)]).collect()
+    }
+}
+
+impl LinearSolve for Cholesky {
+    fn solve_block(&self, b: &mut Mat<f64>) {
+        Cholesky::solve_block(self, b)
+    }
+    fn dimension(&self) -> usize {
+        self.n
+    }
+}
+
 /// Relative residual ‖Kx − f‖/‖f‖ (the check after each factorization, design §4.2).
 pub fn relative_residual(k: &SparseColMat<usize, f64>, x: &[f64], f: &[f64]) -> f64 {
     let r = mul(k, x);

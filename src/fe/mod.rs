@@ -3,6 +3,7 @@
 
 pub mod assembly;
 pub mod clamped_gear;
+pub mod cyclic_symmetry;
 pub mod eigen;
 pub mod gear_mesh;
 pub mod hex8;

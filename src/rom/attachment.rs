@@ -11,7 +11,7 @@
 //! section at depth h) and any face cut through material. Its far lateral edges, where the local
 //! deformation has decayed, end on free surfaces or on such cuts alike.
 
-use crate::fe::assembly::{self, Cholesky, DofMap, Material};
+use crate::fe::assembly::{self, Cholesky, DofMap, LinearSolve, Material};
 use crate::fe::hex8::Formulation;
 use crate::fe::mesh::Mesh;
 
@@ -157,7 +157,7 @@ pub fn total_and_global_response(
     material: &Material,
     formulation: Formulation,
     dofs: &DofMap,
-    total_stiffness: &Cholesky,
+    total_stiffness: &dyn LinearSolve,
     load: &NodalLoad,
     depth_m: f64,
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
@@ -175,7 +175,7 @@ pub fn global_attachment_modes(
     material: &Material,
     formulation: Formulation,
     dofs: &DofMap,
-    total_stiffness: &Cholesky,
+    total_stiffness: &dyn LinearSolve,
     nodes: &[(usize, [f64; 3])],
     depth_m: f64,
     progress: impl Fn(usize) + Sync,
@@ -226,7 +226,7 @@ pub fn global_attachment_modes_of_teeth(
     material: &Material,
     formulation: Formulation,
     dofs: &DofMap,
-    total_stiffness: &Cholesky,
+    total_stiffness: &dyn LinearSolve,
     flank: &super::flank::FlankGrid,
     depth_m: f64,
     progress: impl Fn(usize) + Sync,

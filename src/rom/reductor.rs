@@ -11,7 +11,7 @@
 use super::attachment::global_attachment_modes_of_teeth;
 use super::flank::{FlankGrid, Shares};
 use super::svd::compress;
-use crate::fe::assembly::{Cholesky, DofMap};
+use crate::fe::assembly::{DofMap, LinearSolve};
 use crate::fe::clamped_gear::ClampedGear;
 use faer::Mat;
 
@@ -179,7 +179,7 @@ fn flank_rows(basis: &Mat<f64>, dofs: &DofMap, flank: &FlankGrid) -> Mat<f64> {
 /// deformation energy, scaled to unit reduced stiffness.
 pub fn pmor_hertz(
     model: &ClampedGear,
-    factor: &Cholesky,
+    factor: &dyn LinearSolve,
     flank: FlankGrid,
     depth_m: f64,
     p_en: f64,
@@ -256,7 +256,7 @@ pub const UNIT_STIFFNESS_TOLERANCE: f64 = 1e-9;
 
 /// Standard CMS: ψ = K⁻¹F, one column per loadable node (a unit load along its inward normal).
 /// Then K_CMS = ψᵀKψ = Fᵀψ, read off the flank rows.
-pub fn standard_cms(model: &ClampedGear, factor: &Cholesky, flank: FlankGrid) -> (ReducedGear, Reconstructor) {
+pub fn standard_cms(model: &ClampedGear, factor: &dyn LinearSolve, flank: FlankGrid) -> (ReducedGear, Reconstructor) {
     let n_c = flank.len();
     let mut basis = Mat::zeros(model.dofs.n_free, n_c);
     for (j, &(node, normal)) in flank.nodes.iter().enumerate() {
