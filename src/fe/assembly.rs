@@ -204,6 +204,7 @@ pub struct Cholesky {
 pub const SOLVE_BLOCK: usize = 64;
 
 /// A Cholesky factorization's symbolic part, before the numeric one (`Cholesky::analyse`).
+#[derive(Clone)]
 pub struct CholeskyAnalysis(Arc<SymbolicCholesky<usize>>);
 
 impl CholeskyAnalysis {

@@ -3,24 +3,35 @@
 //! field splits into z Bloch waves u_k = Qᵏ e^{ikφ_h} û (sector k, φ_h = 2πh/z, Q the rotation
 //! by one pitch about the gear axis). On a wave of harmonic h the gear is one sector whose right
 //! edge is its left edge turned by Q and shifted in phase by e^{iφ_h}: the Hermitian sector
-//! matrices K_h = Tᴴ K_sector T (and M_h alike), the standard reduction of bladed disks and
-//! gears. Harmonics h and z − h are complex conjugates: for 0 < h < z/2 the pair is the real
-//! symmetric form [[A, −B], [B, A]] of K_h = A + iB on [Re û; Im û], whose spectrum is K_h's
-//! twice — exactly the gear's double eigenvalues of nodal diameter h. h = 0 (and h = z/2 for
-//! even z) are real and single.
+//! matrix K_h (and M_h alike), the standard reduction of bladed disks and gears. Harmonics h
+//! and z − h are complex conjugates: for 0 < h < z/2 the pair is the real symmetric form
+//! [[A, −B], [B, A]] of K_h = A + iB on [Re û; Im û], whose spectrum is K_h's twice — exactly
+//! the gear's double eigenvalues of nodal diameter h. h = 0 (and h = z/2 for even z) are real
+//! and single.
 //!
-//! What the whole gear needed — one Cholesky factor of the full K — becomes ⌊z/2⌋ + 1 factors of
-//! matrices 2/z of its size: eigenmodes by harmonic (shift-invert Lanczos on each, the Sturm
-//! count summed over the harmonics as the proof that no mode was missed), and static responses
-//! by the discrete Fourier transform of the load over the sectors, a solve per harmonic and the
-//! inverse transform.
+//! The phase lives on the sector's edge only. The sector's interior DOFs (every DOF but those
+//! of its left edge, B) couple to each other alike in every harmonic, so K_II is factorized
+//! once, real, and each harmonic is its edge's dense Schur complement
+//! S_h = K_BB(h) − K_BI(h) K_II⁻¹ K_IB(h), formed from four products computed once. A sparse
+//! factor per harmonic would refactorize the interior ⌊z/2⌋ + 1 times, and on a gear's ring the
+//! interior is most of the work: measured on the Kurokawa helical pair, the harmonics' sparse
+//! factors took longer than the whole gear's.
+//!
+//! Static responses: the load's discrete Fourier transform over the sectors, a solve per
+//! harmonic, the inverse transform. Eigenpairs: shift-invert Lanczos per harmonic. The Sturm
+//! count of K_h − σM_h is, by Haynsworth's inertia additivity, the interior's (one sparse LDLᵀ
+//! of K_II − σM_II for all harmonics) plus the Schur complement's (a dense LDLᵀ per harmonic),
+//! summed over the harmonics: the proof that no mode was missed.
 
 use super::assembly::{symmetric_times_block, Cholesky, CholeskyAnalysis, LinearSolve};
 use super::clamped_gear::ClampedGear;
 use super::eigen::{self, Modes};
 use super::hex8;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::solvers::{Llt, Solve};
+use faer::sparse::linalg::cholesky::LdltRef;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Mat;
+use faer::{Conj, Mat, Par, Side};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -33,27 +44,46 @@ struct SectorLayout {
     gear_dof: Vec<usize>,
 }
 
-/// One harmonic's sector matrices (the real form for 0 < h < z/2).
-struct HarmonicMatrices {
-    harmonic: usize,
-    /// [Re û; Im û] (2·n_sector) for 0 < h < z/2, û alone (n_sector) for h = 0 and h = z/2.
-    doubled: bool,
-    stiffness: SparseColMat<usize, f64>,
-    mass: SparseColMat<usize, f64>,
+/// The sector's DOFs split into its interior I and its left edge B (the images of the nodes one
+/// sector on): `place[d]` is (on the edge, index within I or B).
+struct EdgeSplit {
+    interior: Vec<usize>,
+    edge: Vec<usize>,
+    place: Vec<(bool, usize)>,
 }
 
-/// The clamped gear by harmonics, its sector matrices assembled and analysed (before any
-/// numeric factorization: `factor_nnz` is what the build's memory estimate counts).
+/// The clamped gear by harmonics before any numeric factorization: its sector parts, the
+/// interior/edge split and the interior's symbolic analysis (what the memory estimate counts).
 pub struct CyclicGear {
     layout: SectorLayout,
-    harmonics: Vec<HarmonicMatrices>,
-    analyses: Vec<CholeskyAnalysis>,
+    stiffness: SectorParts,
+    mass: SectorParts,
+    split: EdgeSplit,
+    interior_stiffness: SparseColMat<usize, f64>,
+    interior_analysis: CholeskyAnalysis,
 }
 
-/// The same with each harmonic's Cholesky factor: the gear's eigenmodes and static responses.
+/// A sector matrix (stiffness, or K − σM) condensed onto the edge: the interior's couplings to
+/// the edge from the sector's own nodes (X0) and from those one sector on (X1), and the edge's
+/// Schur parts E0 = own_BB − X0ᵀY0 − X1ᵀY1 and E1 = next_BB − X0ᵀY1 (Y = A_II⁻¹X, formed and
+/// dropped), so that S_h = E0 + e^{iφ}E1 + e^{−iφ}E1ᵀ, since K_IB(h) = X0 + e^{iφ}X1.
+struct Condensed {
+    x0: SparseColMat<usize, f64>,
+    x1: SparseColMat<usize, f64>,
+    e0: Mat<f64>,
+    e1: Mat<f64>,
+}
+
+/// The gear by harmonics, factorized: K_II's Cholesky factor, the condensed stiffness and each
+/// harmonic's Schur complement factor.
 pub struct FactoredCyclicGear {
     layout: SectorLayout,
-    harmonics: Vec<(HarmonicMatrices, Cholesky)>,
+    stiffness: SectorParts,
+    mass: SectorParts,
+    split: EdgeSplit,
+    interior: Cholesky,
+    condensed: Condensed,
+    schur: Vec<Llt<f64>>,
 }
 
 /// The rotation by `angle` about the gear axis (z), row-major.
@@ -63,10 +93,9 @@ fn rotation(angle: f64) -> [[f64; 3]; 3] {
 }
 
 impl CyclicGear {
-    /// The gear's sector matrices for every harmonic, or `None` where the mesh is not an exact
-    /// image of its first sector (element by element and node by node under
-    /// `GearMesh::node_turned_by_teeth`), or a node is clamped in some directions only: then
-    /// the whole gear must be solved.
+    /// The gear's sector matrices, or `None` where the mesh is not an exact image of its first
+    /// sector (element by element and node by node under `GearMesh::node_turned_by_teeth`), or
+    /// a node is clamped in some directions only: then the whole gear must be solved.
     pub fn new(model: &ClampedGear) -> Result<Option<CyclicGear>, String> {
         let gear = &model.mesh;
         let z = gear.teeth;
@@ -133,145 +162,429 @@ impl CyclicGear {
             return Ok(None);
         }
         let layout = SectorLayout { teeth: z, n_sector, gear_dof };
-        // The element matrices of sector 0, each with its nodes' place in the sector: (sector
-        // DOF of the node's first direction or None if clamped, whether it lies one sector on).
+        // Sector 0's stiffness and mass split by where the element nodes lie, the nodes one
+        // sector on turned back onto their images in sector 0.
         let d = hex8::elasticity(model.material.youngs_modulus_pa, model.material.poisson_ratio);
-        let element_data: Vec<(hex8::Mat24, hex8::Mat24, [(Option<usize>, bool); 8])> = first
-            .par_iter()
-            .map(|&e| {
-                let coords = gear.mesh.element_coords(e);
-                let places = elements[e].map(|n| {
-                    let next = sector_of(n) == 1;
-                    let image = if next { gear.node_turned_by_teeth(n, -1) } else { n };
-                    (sector_dof[3 * image], next)
-                });
-                (
-                    hex8::stiffness(&coords, &d, model.formulation),
-                    hex8::mass(&coords, model.material.density_kg_m3),
-                    places,
-                )
+        let places = |e: usize| {
+            elements[e].map(|n| {
+                let next = sector_of(n) == 1;
+                let image = if next { gear.node_turned_by_teeth(n, -1) } else { n };
+                (sector_dof[3 * image], next)
             })
-            .collect();
-        let harmonics: Vec<HarmonicMatrices> =
-            (0..=z / 2).into_par_iter().map(|h| harmonic_matrices(&element_data, n_sector, z, h)).collect();
-        let analyses =
-            harmonics.par_iter().map(|m| Cholesky::analyse(&m.stiffness, None)).collect::<Result<Vec<_>, _>>()?;
-        Ok(Some(CyclicGear { layout, harmonics, analyses }))
-    }
-
-    /// Harmonics ⌊z/2⌋ + 1 and the size of each sector problem (free DOFs of one sector).
-    pub fn harmonics(&self) -> usize {
-        self.harmonics.len()
-    }
-
-    pub fn sector_dofs(&self) -> usize {
-        self.layout.n_sector
-    }
-
-    /// Non-zeros of all harmonics' factors together (held at once).
-    pub fn factor_nnz(&self) -> usize {
-        self.analyses.iter().map(|a| a.factor_nnz()).sum()
-    }
-
-    /// Non-zeros of all harmonics' stiffness and mass matrices.
-    pub fn matrix_nnz(&self) -> usize {
-        self.harmonics.iter().map(|m| m.stiffness.compute_nnz() + m.mass.compute_nnz()).sum()
-    }
-
-    /// The largest factorization work space of one harmonic (bytes).
-    pub fn factorization_scratch_bytes(&self) -> usize {
-        self.analyses.iter().map(|a| a.factorization_scratch_bytes()).max().unwrap_or(0)
-    }
-
-    /// Each harmonic's Cholesky factor (harmonics in parallel).
-    pub fn factorize(self) -> Result<FactoredCyclicGear, String> {
-        let CyclicGear { layout, harmonics, analyses } = self;
-        let harmonics = harmonics
-            .into_par_iter()
-            .zip(analyses)
-            .map(|(m, a)| {
-                let factor = a.factorize(&m.stiffness)?;
-                Ok((m, factor))
-            })
-            .collect::<Result<Vec<_>, String>>()?;
-        Ok(FactoredCyclicGear { layout, harmonics })
-    }
-}
-
-/// K_h and M_h of harmonic h, from sector 0's element matrices: per element T_eᵀ K_e T_e with
-/// T_e = C + iS, C = I and S = 0 on the sector's own nodes, C = cos φ_h·Q and S = sin φ_h·Q on
-/// the nodes one sector on; A = CᵀKC + SᵀKS, B = CᵀKS − SᵀKC. B is written wherever a node one
-/// sector on takes part (zero or not), so that K_h and M_h share a pattern (the Sturm count's
-/// LDLᵀ of K_h − σM_h runs on K_h's analysis).
-fn harmonic_matrices(
-    elements: &[(hex8::Mat24, hex8::Mat24, [(Option<usize>, bool); 8])],
-    n_sector: usize,
-    z: usize,
-    h: usize,
-) -> HarmonicMatrices {
-    let doubled = 2 * h != z && h != 0;
-    let phase = 2.0 * PI * h as f64 / z as f64;
-    let (sin, cos) = if doubled { phase.sin_cos() } else if h == 0 { (0.0, 1.0) } else { (0.0, -1.0) };
-    let q = rotation(2.0 * PI / z as f64);
-    let mut c = hex8::Mat24::zeros();
-    let mut s = hex8::Mat24::zeros();
-    let transform = |places: &[(Option<usize>, bool); 8], c: &mut hex8::Mat24, s: &mut hex8::Mat24| {
-        c.fill(0.0);
-        s.fill(0.0);
-        for (a, &(_, next)) in places.iter().enumerate() {
-            for i in 0..3 {
-                for j in 0..3 {
-                    if next {
-                        c[(3 * a + i, 3 * a + j)] = cos * q[i][j];
-                        s[(3 * a + i, 3 * a + j)] = sin * q[i][j];
-                    } else if i == j {
-                        c[(3 * a + i, 3 * a + j)] = 1.0;
-                    }
-                }
+        };
+        let q = rotation(2.0 * PI / z as f64);
+        let stiffness = SectorParts::assemble(&first, n_sector, &q, places, |e| {
+            hex8::stiffness(&gear.mesh.element_coords(e), &d, model.formulation)
+        });
+        let mass = SectorParts::assemble(&first, n_sector, &q, places, |e| {
+            hex8::mass(&gear.mesh.element_coords(e), model.material.density_kg_m3)
+        });
+        // The edge: every DOF a node one sector on turns back onto (the columns of `next`).
+        let mut on_edge = vec![false; n_sector];
+        let next = stiffness.next.as_ref();
+        for j in 0..n_sector {
+            if next.row_idx_of_col(j).next().is_some() {
+                on_edge[j] = true;
             }
         }
-    };
-    let size = if doubled { 2 * n_sector } else { n_sector };
-    let mut k_triplets = Vec::new();
-    let mut m_triplets = Vec::new();
-    for (k_e, m_e, places) in elements {
-        transform(places, &mut c, &mut s);
-        for (matrix, triplets) in [(k_e, &mut k_triplets), (m_e, &mut m_triplets)] {
-            let a = c.transpose() * matrix * c + s.transpose() * matrix * s;
-            let b = c.transpose() * matrix * s - s.transpose() * matrix * c;
-            for (ea, &(da, next_a)) in places.iter().enumerate() {
-                let Some(da) = da else { continue };
-                for (eb, &(db, next_b)) in places.iter().enumerate() {
-                    let Some(db) = db else { continue };
-                    let coupled = doubled && (next_a || next_b);
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            let (row, col) = (da + i, db + j);
-                            let v = a[(3 * ea + i, 3 * eb + j)];
-                            triplets.push(Triplet::new(row, col, v));
-                            if doubled {
-                                triplets.push(Triplet::new(n_sector + row, n_sector + col, v));
-                            }
-                            if coupled {
-                                let w = b[(3 * ea + i, 3 * eb + j)];
-                                triplets.push(Triplet::new(row, n_sector + col, -w));
-                                triplets.push(Triplet::new(n_sector + row, col, w));
-                            }
+        let (mut interior, mut edge, mut place) = (Vec::new(), Vec::new(), Vec::with_capacity(n_sector));
+        for (d, &e) in on_edge.iter().enumerate() {
+            if e {
+                place.push((true, edge.len()));
+                edge.push(d);
+            } else {
+                place.push((false, interior.len()));
+                interior.push(d);
+            }
+        }
+        let split = EdgeSplit { interior, edge, place };
+        // K_II ordered by nested dissection of the interior's node graph (an open slab: the
+        // edge that closes the sector onto itself is not in it).
+        let mut node_of_interior = vec![usize::MAX; own_nodes.len()];
+        let mut interior_nodes = 0;
+        for (node, slot) in node_of_interior.iter_mut().enumerate() {
+            if !split.place[3 * node].0 {
+                *slot = interior_nodes;
+                interior_nodes += 1;
+            }
+        }
+        let mut neighbours: Vec<Vec<i32>> = vec![Vec::new(); interior_nodes];
+        for &e in &first {
+            let nodes = places(e);
+            for &(a, _) in &nodes {
+                for &(b, _) in &nodes {
+                    if let (Some(a), Some(b)) = (a, b) {
+                        let (a, b) = (node_of_interior[a / 3], node_of_interior[b / 3]);
+                        if a != b && a != usize::MAX && b != usize::MAX {
+                            neighbours[a].push(b as i32);
                         }
                     }
                 }
             }
         }
+        if (0..own_nodes.len()).any(|node| (0..3).any(|c| split.place[3 * node + c].0 != split.place[3 * node].0)) {
+            return Err("an edge node of the sector has DOFs off the edge".into());
+        }
+        let ordering = super::ordering::nested_dissection_of_nodes(neighbours, |node| {
+            (0..3).map(|c| 3 * node + c).collect()
+        })?;
+        let interior_stiffness = block(&stiffness.own, &split, false, false);
+        let interior_analysis = Cholesky::analyse(&interior_stiffness, Some(&ordering))?;
+        Ok(Some(CyclicGear { layout, stiffness, mass, split, interior_stiffness, interior_analysis }))
     }
-    let assemble = |t: &[Triplet<usize, usize, f64>]| {
-        SparseColMat::try_new_from_triplets(size, size, t).expect("sector DOFs within the sector")
+
+    /// Harmonics ⌊z/2⌋ + 1.
+    pub fn harmonics(&self) -> usize {
+        self.layout.teeth / 2 + 1
+    }
+
+    /// Free DOFs of one sector, and of its edge.
+    pub fn sector_dofs(&self) -> usize {
+        self.layout.n_sector
+    }
+
+    pub fn edge_dofs(&self) -> usize {
+        self.split.edge.len()
+    }
+
+    /// Non-zeros of the interior's Cholesky factor.
+    pub fn factor_nnz(&self) -> usize {
+        self.interior_analysis.factor_nnz()
+    }
+
+    /// Non-zeros of the sector parts (stiffness and mass, own and next).
+    pub fn matrix_nnz(&self) -> usize {
+        [&self.stiffness, &self.mass].iter().map(|p| p.own.compute_nnz() + p.next.compute_nnz()).sum()
+    }
+
+    /// The interior factorization's work space (bytes).
+    pub fn factorization_scratch_bytes(&self) -> usize {
+        self.interior_analysis.factorization_scratch_bytes()
+    }
+
+    /// Dense entries the factorized gear holds at its fullest: the interior solutions of the
+    /// edge couplings while they are condensed (Y0, Y1), the edge's parts, and each harmonic's
+    /// Schur factor (the real form of the pairs, 2n_B square).
+    pub fn dense_entries(&self) -> usize {
+        let (n_i, n_b) = (self.split.interior.len(), self.split.edge.len());
+        2 * n_i * n_b + 4 * n_b * n_b + self.harmonics() * 4 * n_b * n_b
+    }
+
+    /// K_II's factor, the condensed stiffness and every harmonic's Schur complement factor.
+    pub fn factorize(self) -> Result<FactoredCyclicGear, String> {
+        let CyclicGear { layout, stiffness, mass, split, interior_stiffness, interior_analysis } = self;
+        let interior = interior_analysis.factorize(&interior_stiffness)?;
+        let condensed = condense(&stiffness.own, &stiffness.next, &split, |y| interior.solve_block(y));
+        let z = layout.teeth;
+        let schur = (0..=z / 2)
+            .into_par_iter()
+            .map(|h| {
+                let (doubled, cos, sin) = phase_of_harmonic(h, z);
+                schur_complement(&condensed, doubled, cos, sin)
+                    .llt(Side::Lower)
+                    .map_err(|e| format!("harmonic {h}: Schur complement of the sector edge not positive definite: {e:?}"))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        Ok(FactoredCyclicGear { layout, stiffness, mass, split, interior, condensed, schur })
+    }
+}
+
+/// A's block on the interior or edge rows and columns (`rows_on_edge`, `cols_on_edge`).
+fn block(a: &SparseColMat<usize, f64>, split: &EdgeSplit, rows_on_edge: bool, cols_on_edge: bool) -> SparseColMat<usize, f64> {
+    let size = |edge: bool| if edge { split.edge.len() } else { split.interior.len() };
+    let a = a.as_ref();
+    let mut t = Vec::new();
+    for j in 0..a.ncols() {
+        let (on_edge, col) = split.place[j];
+        if on_edge != cols_on_edge {
+            continue;
+        }
+        for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            let (on_edge, row) = split.place[i];
+            if on_edge == rows_on_edge {
+                t.push(Triplet::new(row, col, v));
+            }
+        }
+    }
+    SparseColMat::try_new_from_triplets(size(rows_on_edge), size(cols_on_edge), &t).expect("indices within the blocks")
+}
+
+/// A sparse matrix dense.
+fn dense(a: &SparseColMat<usize, f64>) -> Mat<f64> {
+    let mut d = Mat::zeros(a.nrows(), a.ncols());
+    let a = a.as_ref();
+    for j in 0..a.ncols() {
+        for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            d[(i, j)] += v;
+        }
+    }
+    d
+}
+
+/// Xᵀ·Y for a sparse X (n × p) and a dense Y (n × q): p × q. X couples the interior to the
+/// edge through one layer of nodes, so this is nnz(X)·q operations.
+fn transpose_times(x: &SparseColMat<usize, f64>, y: &Mat<f64>) -> Mat<f64> {
+    let x = x.as_ref();
+    let mut out = Mat::zeros(x.ncols(), y.ncols());
+    out.par_col_chunks_mut(1).enumerate().for_each(|(j, mut column)| {
+        for a in 0..x.ncols() {
+            column[(a, 0)] = x.row_idx_of_col(a).zip(x.val_of_col(a)).map(|(i, &v)| v * y[(i, j)]).sum();
+        }
+    });
+    out
+}
+
+/// The condensation of a sector matrix given by its parts `own` and `next`, with the interior
+/// solve `solve` (in place, a block of columns).
+fn condense(
+    own: &SparseColMat<usize, f64>,
+    next: &SparseColMat<usize, f64>,
+    split: &EdgeSplit,
+    solve: impl Fn(&mut Mat<f64>),
+) -> Condensed {
+    let x0 = block(own, split, false, true);
+    let x1 = block(next, split, false, true);
+    let (mut y0, mut y1) = (dense(&x0), dense(&x1));
+    solve(&mut y0);
+    solve(&mut y1);
+    let g01 = transpose_times(&x0, &y1);
+    let e0 = dense(&block(own, split, true, true)) - transpose_times(&x0, &y0) - transpose_times(&x1, &y1);
+    let e1 = dense(&block(next, split, true, true)) - g01;
+    Condensed { x0, x1, e0, e1 }
+}
+
+/// The real form of the edge's Schur complement S_h = E0 + e^{iφ}E1 + e^{−iφ}E1ᵀ: Re = E0 +
+/// cos φ (E1 + E1ᵀ), Im = sin φ (E1 − E1ᵀ); [[Re, −Im], [Im, Re]] for a pair, Re alone else.
+fn schur_complement(c: &Condensed, doubled: bool, cos: f64, sin: f64) -> Mat<f64> {
+    let n = c.e0.nrows();
+    let re = |i: usize, j: usize| c.e0[(i, j)] + cos * (c.e1[(i, j)] + c.e1[(j, i)]);
+    if !doubled {
+        return Mat::from_fn(n, n, re);
+    }
+    let im = |i: usize, j: usize| sin * (c.e1[(i, j)] - c.e1[(j, i)]);
+    Mat::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
+        (true, true) => re(i, j),
+        (false, false) => re(i - n, j - n),
+        (true, false) => -im(i, j - n),
+        (false, true) => im(i - n, j),
+    })
+}
+
+/// Whether harmonic h of z is a conjugate pair (its real form doubled), and cos φ_h, sin φ_h
+/// (exact for the single harmonics h = 0 and h = z/2).
+fn phase_of_harmonic(h: usize, z: usize) -> (bool, f64, f64) {
+    let doubled = h != 0 && 2 * h != z;
+    let (sin, cos) = if doubled {
+        (2.0 * PI * h as f64 / z as f64).sin_cos()
+    } else if h == 0 {
+        (0.0, 1.0)
+    } else {
+        (0.0, -1.0)
     };
-    HarmonicMatrices { harmonic: h, doubled, stiffness: assemble(&k_triplets), mass: assemble(&m_triplets) }
+    (doubled, cos, sin)
+}
+
+/// Sector 0's stiffness (or mass) with the nodes one sector on turned back by Q onto their
+/// images: `own` couples DOFs whose nodes are both the sector's own or both one sector on,
+/// `next` a node of its own (row) to one a sector on (column). On a wave of harmonic h those
+/// nodes carry the phase e^{iφ_h}, so the sector matrix is
+/// K_h = own + e^{iφ_h}·next + e^{−iφ_h}·nextᵀ = A + iB with A = own + cos φ_h (next + nextᵀ)
+/// and B = sin φ_h (next − nextᵀ): no element matrix is formed again per harmonic.
+struct SectorParts {
+    own: SparseColMat<usize, f64>,
+    next: SparseColMat<usize, f64>,
+}
+
+impl SectorParts {
+    fn assemble(
+        first: &[usize],
+        n_sector: usize,
+        q: &[[f64; 3]; 3],
+        places: impl Fn(usize) -> [(Option<usize>, bool); 8] + Sync,
+        element: impl Fn(usize) -> hex8::Mat24 + Sync,
+    ) -> SectorParts {
+        type Triplets = Vec<Triplet<usize, usize, f64>>;
+        let (own, next): (Vec<Triplets>, Vec<Triplets>) = first
+            .par_iter()
+            .map(|&e| {
+                let (k_e, places) = (element(e), places(e));
+                let (mut own, mut next) = (Vec::with_capacity(576), Vec::new());
+                for (a, &(da, next_a)) in places.iter().enumerate() {
+                    let Some(da) = da else { continue };
+                    for (b, &(db, next_b)) in places.iter().enumerate() {
+                        let Some(db) = db else { continue };
+                        // A row on a node one sector on, a column on the sector's own: the
+                        // transpose of the pair (b, a), which `next` holds.
+                        if next_a && !next_b {
+                            continue;
+                        }
+                        // The 3 × 3 block turned back: R_aᵀ K_ab R_b, R = Q one sector on, I else.
+                        let block = |i: usize, j: usize| -> f64 {
+                            let mut v = 0.0;
+                            for r in 0..3 {
+                                let ra = if next_a { q[r][i] } else { (r == i) as u8 as f64 };
+                                if ra == 0.0 {
+                                    continue;
+                                }
+                                for c in 0..3 {
+                                    let rb = if next_b { q[c][j] } else { (c == j) as u8 as f64 };
+                                    v += ra * k_e[(3 * a + r, 3 * b + c)] * rb;
+                                }
+                            }
+                            v
+                        };
+                        let target = if !next_a && next_b { &mut next } else { &mut own };
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                target.push(Triplet::new(da + i, db + j, block(i, j)));
+                            }
+                        }
+                    }
+                }
+                (own, next)
+            })
+            .unzip();
+        let assemble = |t: Vec<Triplets>| {
+            let t: Triplets = t.into_iter().flatten().collect();
+            SparseColMat::try_new_from_triplets(n_sector, n_sector, &t).expect("sector DOFs within the sector")
+        };
+        SectorParts { own: assemble(own), next: assemble(next) }
+    }
+
+    /// The real form of K_h: [[A, −B], [B, A]] for a conjugate pair, A alone (B = 0) for a
+    /// single harmonic. Every entry of `next` is written whatever its coefficient, so that all
+    /// harmonics of a kind share one pattern (one symbolic analysis; K_h − σM_h for the Sturm
+    /// count has it too).
+    fn harmonic(&self, doubled: bool, cos: f64, sin: f64) -> SparseColMat<usize, f64> {
+        let n = self.own.nrows();
+        let size = if doubled { 2 * n } else { n };
+        let mut t = Vec::with_capacity(if doubled { 2 } else { 1 } * (self.own.compute_nnz() + 4 * self.next.compute_nnz()));
+        let mut both = |i: usize, j: usize, v: f64| {
+            t.push(Triplet::new(i, j, v));
+            if doubled {
+                t.push(Triplet::new(n + i, n + j, v));
+            }
+        };
+        let (own, next) = (self.own.as_ref(), self.next.as_ref());
+        for j in 0..n {
+            for (i, &v) in own.row_idx_of_col(j).zip(own.val_of_col(j)) {
+                both(i, j, v);
+            }
+            for (i, &v) in next.row_idx_of_col(j).zip(next.val_of_col(j)) {
+                both(i, j, cos * v);
+                both(j, i, cos * v);
+            }
+        }
+        if doubled {
+            for j in 0..n {
+                for (i, &v) in next.row_idx_of_col(j).zip(next.val_of_col(j)) {
+                    // B(i, j) = sin·v, B(j, i) = −sin·v; the real form has −B above, B below.
+                    t.push(Triplet::new(i, n + j, -sin * v));
+                    t.push(Triplet::new(n + i, j, sin * v));
+                    t.push(Triplet::new(j, n + i, sin * v));
+                    t.push(Triplet::new(n + j, i, -sin * v));
+                }
+            }
+        }
+        SparseColMat::try_new_from_triplets(size, size, &t).expect("sector DOFs within the sector")
+    }
+}
+
+/// X·U for a sparse X (n × p) and a dense U (p × q).
+fn times(x: &SparseColMat<usize, f64>, u: &Mat<f64>) -> Mat<f64> {
+    let x = x.as_ref();
+    let mut out = Mat::zeros(x.nrows(), u.ncols());
+    out.par_col_chunks_mut(1).enumerate().for_each(|(j, mut column)| {
+        for a in 0..x.ncols() {
+            let ua = u[(a, j)];
+            if ua != 0.0 {
+                for (i, &v) in x.row_idx_of_col(a).zip(x.val_of_col(a)) {
+                    column[(i, 0)] += v * ua;
+                }
+            }
+        }
+    });
+    out
+}
+
+/// Sparse a − σ·b (the same sector parts' pattern).
+fn shifted(a: &SparseColMat<usize, f64>, b: &SparseColMat<usize, f64>, sigma: f64) -> SparseColMat<usize, f64> {
+    let mut t = Vec::with_capacity(a.compute_nnz() + b.compute_nnz());
+    for (m, scale) in [(a.as_ref(), 1.0), (b.as_ref(), -sigma)] {
+        for j in 0..m.ncols() {
+            for (i, &v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
+                t.push(Triplet::new(i, j, scale * v));
+            }
+        }
+    }
+    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &t).expect("same shape")
+}
+
+/// One harmonic's real-form solve, for the Lanczos steps of that harmonic.
+struct HarmonicSolver<'a> {
+    gear: &'a FactoredCyclicGear,
+    harmonic: usize,
+}
+
+impl LinearSolve for HarmonicSolver<'_> {
+    fn solve_block(&self, b: &mut Mat<f64>) {
+        self.gear.solve_harmonic(self.harmonic, b)
+    }
+    fn dimension(&self) -> usize {
+        let doubled = phase_of_harmonic(self.harmonic, self.gear.layout.teeth).0;
+        self.gear.layout.n_sector * if doubled { 2 } else { 1 }
+    }
 }
 
 impl FactoredCyclicGear {
     fn phase(&self, h: usize, k: usize) -> (f64, f64) {
         (2.0 * PI * ((h * k) % self.layout.teeth) as f64 / self.layout.teeth as f64).sin_cos()
+    }
+
+    /// K_h u = b in the real form, in place (rows: Re on the sector DOFs, then Im for a pair),
+    /// through the edge: with b = f + ig,
+    /// z + iw = K_II⁻¹ b_I, the edge's load r = b_B − (X0 + e^{−iφ}X1)ᵀ(z + iw), its response
+    /// u_B = S_h⁻¹ r, and the interior's u_I = K_II⁻¹(b_I − (X0 + e^{iφ}X1) u_B).
+    fn solve_harmonic(&self, h: usize, b: &mut Mat<f64>) {
+        let (doubled, cos, sin) = phase_of_harmonic(h, self.layout.teeth);
+        let (n, cols) = (self.layout.n_sector, b.ncols());
+        let parts = if doubled { 2 } else { 1 };
+        let (n_i, n_b) = (self.split.interior.len(), self.split.edge.len());
+        let c = &self.condensed;
+        // Columns [Re | Im] of the interior and edge loads.
+        let gather = |dofs: &[usize]| {
+            Mat::from_fn(dofs.len(), parts * cols, |r, j| b[((j / cols) * n + dofs[r], j % cols)])
+        };
+        let (mut zw, edge_load) = (gather(&self.split.interior), gather(&self.split.edge));
+        self.interior.solve_block(&mut zw);
+        let (t0, t1) = (transpose_times(&c.x0, &zw), transpose_times(&c.x1, &zw));
+        // r = b_B − X0ᵀ(z + iw) − e^{−iφ} X1ᵀ(z + iw), e^{−iφ}(t + it') = (c t + s t') + i(c t' − s t).
+        let mut r = Mat::from_fn(parts * n_b, cols, |row, j| {
+            let (part, a) = (row / n_b, row % n_b);
+            let (t1_re, t1_im) = (t1[(a, j)], if doubled { t1[(a, cols + j)] } else { 0.0 });
+            let rotated = if part == 0 { cos * t1_re + sin * t1_im } else { cos * t1_im - sin * t1_re };
+            edge_load[(a, part * cols + j)] - t0[(a, part * cols + j)] - rotated
+        });
+        self.schur[h].solve_in_place(r.as_mut());
+        // u_B = p + iq; X0·u_B + e^{iφ}X1·u_B, e^{iφ}(v + iv') = (c v − s v') + i(s v + c v').
+        let pq = Mat::from_fn(n_b, parts * cols, |a, j| r[((j / cols) * n_b + a, j % cols)]);
+        let (v0, v1) = (times(&c.x0, &pq), times(&c.x1, &pq));
+        let mut interior_load = Mat::from_fn(n_i, parts * cols, |i, j| {
+            let (part, col) = (j / cols, j % cols);
+            let (v_re, v_im) = (v1[(i, col)], if doubled { v1[(i, cols + col)] } else { 0.0 });
+            let rotated = if part == 0 { cos * v_re - sin * v_im } else { sin * v_re + cos * v_im };
+            b[(part * n + self.split.interior[i], col)] - v0[(i, j)] - rotated
+        });
+        self.interior.solve_block(&mut interior_load);
+        for j in 0..parts * cols {
+            let (part, col) = (j / cols, j % cols);
+            for (i, &d) in self.split.interior.iter().enumerate() {
+                b[(part * n + d, col)] = interior_load[(i, j)];
+            }
+            for (a, &d) in self.split.edge.iter().enumerate() {
+                b[(part * n + d, col)] = pq[(a, j)];
+            }
+        }
     }
 
     /// A sector field (n_sector, sector 0's frame) placed in sector k of a whole-gear field:
@@ -288,26 +601,59 @@ impl FactoredCyclicGear {
         }
     }
 
-    /// The whole-gear field (free DOFs) of a harmonic's sector vector: Re(Qᵏ e^{ikφ_h} û) on
-    /// sector k, û = x + iy the halves of a real-form vector (y = 0 when h is single).
-    fn expand(&self, m: &HarmonicMatrices, vector: &[f64], gear: &mut [f64], weight: f64) {
+    /// The whole-gear field (free DOFs) of harmonic h's real-form vector, added with `weight`:
+    /// Re(Qᵏ e^{ikφ_h} û) on sector k, û = x + iy the halves of the vector (y = 0 when single).
+    fn expand(&self, h: usize, vector: &[f64], gear: &mut [f64], weight: f64) {
+        let doubled = phase_of_harmonic(h, self.layout.teeth).0;
         let n = self.layout.n_sector;
         let mut sector = vec![0.0; n];
         for k in 0..self.layout.teeth {
-            let (s, c) = self.phase(m.harmonic, k);
+            let (s, c) = self.phase(h, k);
             for d in 0..n {
-                sector[d] = if m.doubled { c * vector[d] - s * vector[n + d] } else { c * vector[d] };
+                sector[d] = if doubled { c * vector[d] - s * vector[n + d] } else { c * vector[d] };
             }
             self.add_to_sector(k, weight, &sector, gear);
         }
+    }
+
+    /// The number of eigenvalues of the whole gear below σ: per harmonic, by Haynsworth, the
+    /// negative pivots of the interior's LDLᵀ of K_II − σM_II (one for all harmonics, twice
+    /// for a pair's real form) plus those of the dense LDLᵀ of the edge's Schur complement of
+    /// K_h − σM_h; summed over the harmonics.
+    fn sturm_count(&self, sigma: f64) -> Result<usize, String> {
+        let own = shifted(&self.stiffness.own, &self.mass.own, sigma);
+        let next = shifted(&self.stiffness.next, &self.mass.next, sigma);
+        let interior = block(&own, &self.split, false, false);
+        let symbolic = self.interior.symbolic();
+        let values = eigen::ldlt_values(symbolic, &interior)?;
+        let interior_negative = eigen::negative_pivots(symbolic, &values);
+        let ldlt = LdltRef::new(symbolic, &values);
+        let condensed = condense(&own, &next, &self.split, |y| {
+            let mut buffer = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(y.ncols(), Par::Seq));
+            ldlt.solve_in_place_with_conj(Conj::No, y.as_mut(), Par::Seq, MemStack::new(&mut buffer));
+        });
+        let z = self.layout.teeth;
+        let counts = (0..=z / 2)
+            .into_par_iter()
+            .map(|h| {
+                let (doubled, cos, sin) = phase_of_harmonic(h, z);
+                let schur = schur_complement(&condensed, doubled, cos, sin)
+                    .ldlt(Side::Lower)
+                    .map_err(|e| format!("harmonic {h}: LDLᵀ of the edge's K − σM failed (σ on an eigenvalue?): {e:?}"))?;
+                let d = schur.D();
+                let edge_negative = (0..d.dim()).filter(|&i| d[i] < 0.0).count();
+                Ok(if doubled { 2 } else { 1 } * interior_negative + edge_negative)
+            })
+            .collect::<Result<Vec<usize>, String>>()?;
+        Ok(counts.into_iter().sum())
     }
 
     /// The `count` lowest eigenpairs of the whole clamped gear, K x = λ M x (free DOFs), by
     /// harmonics: each harmonic's lowest pairs until every harmonic's last computed eigenvalue
     /// lies above the gear's `count`-th, so that the union holds the gear's lowest `count`
     /// (and the next distinct one, for the shift). The Sturm count is the sum over the
-    /// harmonics of the negative pivots of K_h − σM_h; the residuals are the whole gear's
-    /// (‖Kx − λMx‖/‖Kx‖ with the whole K and M), so the expansion is checked too.
+    /// harmonics (`sturm_count`); the residuals are the whole gear's (‖Kx − λMx‖/‖Kx‖ with
+    /// the whole K and M), so the expansion is checked too.
     pub fn lowest_modes(
         &self,
         k: &SparseColMat<usize, f64>,
@@ -316,31 +662,35 @@ impl FactoredCyclicGear {
         tolerance: f64,
         max_iterations: usize,
     ) -> Result<Modes, String> {
-        let n = self.layout.n_sector * self.layout.teeth;
+        let z = self.layout.teeth;
+        let n = self.layout.n_sector * z;
         if count == 0 || count > n || k.nrows() != n {
             return Err(format!("cannot compute {count} modes of a {n}-DOF model"));
         }
+        let harmonics = z / 2 + 1;
+        let size = |h: usize| self.layout.n_sector * if phase_of_harmonic(h, z).0 { 2 } else { 1 };
+        let cap = |h: usize| size(h) / 2;
         // A first guess: the cyclic spectrum spreads over the harmonics, a few each.
-        let size = |hm: &HarmonicMatrices| hm.stiffness.nrows();
-        let first = (2 * count).div_ceil(self.harmonics.len()).max(4);
-        let cap = |hm: &HarmonicMatrices| size(hm) / 2;
-        let mut wanted: Vec<usize> = self.harmonics.iter().map(|(hm, _)| first.min(cap(hm))).collect();
-        let mut found: Vec<Option<Modes>> = (0..self.harmonics.len()).map(|_| None).collect();
+        let first = (2 * count).div_ceil(harmonics).max(4);
+        let mut wanted: Vec<usize> = (0..harmonics).map(|h| first.min(cap(h))).collect();
+        let mut found: Vec<Option<Modes>> = (0..harmonics).map(|_| None).collect();
         loop {
-            let solved: Vec<Result<Modes, String>> = self
-                .harmonics
+            let unsolved: Vec<usize> = (0..harmonics).filter(|&h| found[h].is_none()).collect();
+            let solved: Vec<Result<Modes, String>> = unsolved
                 .par_iter()
-                .zip(&wanted)
-                .zip(&found)
-                .filter(|(_, f)| f.is_none())
-                .map(|(((hm, factor), &w), _)| {
-                    eigen::lowest_modes_factored(&hm.stiffness, &hm.mass, factor, w, tolerance, max_iterations, |_, _| {})
-                        .map_err(|e| format!("harmonic {}: {e}", hm.harmonic))
+                .map(|&h| {
+                    let (doubled, cos, sin) = phase_of_harmonic(h, z);
+                    let k_h = self.stiffness.harmonic(doubled, cos, sin);
+                    let m_h = self.mass.harmonic(doubled, cos, sin);
+                    let solver = HarmonicSolver { gear: self, harmonic: h };
+                    // Counted once below, at the gear's shift, not at each harmonic's own.
+                    eigen::lowest_modes_before_sturm_count(&k_h, &m_h, &solver, wanted[h], tolerance, max_iterations, |_, _| {})
+                        .map(|(modes, _)| modes)
+                        .map_err(|e| format!("harmonic {h}: {e}"))
                 })
                 .collect();
-            let mut solved = solved.into_iter();
-            for f in found.iter_mut().filter(|f| f.is_none()) {
-                *f = Some(solved.next().expect("one result per harmonic solved")?);
+            for (h, modes) in unsolved.into_iter().zip(solved) {
+                found[h] = Some(modes?);
             }
             let mut all: Vec<f64> = found.iter().flatten().flat_map(|m| m.eigenvalues.iter().cloned()).collect();
             all.sort_by(f64::total_cmp);
@@ -351,11 +701,10 @@ impl FactoredCyclicGear {
             // A harmonic whose last computed eigenvalue is not above the gear's count-th may
             // hold more below it: asked again for twice as many.
             let mut again = false;
-            for h in 0..self.harmonics.len() {
-                let modes = found[h].as_ref().expect("solved");
-                let top = *modes.eigenvalues.last().expect("at least one mode");
-                if top <= last_wanted * (1.0 + 1e-6) && wanted[h] < cap(&self.harmonics[h].0) {
-                    wanted[h] = (2 * wanted[h]).min(cap(&self.harmonics[h].0));
+            for h in 0..harmonics {
+                let top = *found[h].as_ref().expect("solved").eigenvalues.last().expect("at least one mode");
+                if top <= last_wanted * (1.0 + 1e-6) && wanted[h] < cap(h) {
+                    wanted[h] = (2 * wanted[h]).min(cap(h));
                     found[h] = None;
                     again = true;
                 }
@@ -380,24 +729,18 @@ impl FactoredCyclicGear {
             .ok_or("no eigenvalue above the wanted ones: the shift for the Sturm count has no place")?;
         let sigma = 0.5 * (last + next);
         let expected = pool.iter().filter(|p| p.0 < sigma).count();
-        let sturm = self
-            .harmonics
-            .par_iter()
-            .map(|(hm, factor)| eigen::sturm_count_factored(&hm.stiffness, &hm.mass, sigma, factor))
-            .collect::<Result<Vec<_>, _>>()?
-            .into_iter()
-            .sum();
+        let sturm = self.sturm_count(sigma)?;
         // The whole gear's modes: each harmonic vector expanded, mass-normalized (a wave's mass
-        // is z/2 times its sector form's, z times for a single harmonic: checked by the M norm).
+        // is z/2 times its sector form's, z times for a single harmonic: the whole M checks it).
         let mut vectors = Mat::<f64>::zeros(n, count);
         vectors.par_col_chunks_mut(1).enumerate().for_each(|(j, mut column)| {
             let (_, h, index) = pool[j];
-            let (hm, _) = &self.harmonics[h];
             let mode = &found[h].vectors;
             let vector: Vec<f64> = (0..mode.nrows()).map(|r| mode[(r, index)]).collect();
-            let weight = if hm.doubled { (2.0 / self.layout.teeth as f64).sqrt() } else { 1.0 / (self.layout.teeth as f64).sqrt() };
+            let doubled = phase_of_harmonic(h, z).0;
+            let weight = if doubled { (2.0 / z as f64).sqrt() } else { 1.0 / (z as f64).sqrt() };
             let mut gear = vec![0.0; n];
-            self.expand(hm, &vector, &mut gear, weight);
+            self.expand(h, &vector, &mut gear, weight);
             for (r, v) in gear.into_iter().enumerate() {
                 column[(r, 0)] = v;
             }
@@ -457,33 +800,31 @@ impl LinearSolve for FactoredCyclicGear {
                 ))
             })
             .collect();
-        let responses: Vec<Mat<f64>> = self
-            .harmonics
-            .iter()
-            .map(|(hm, factor)| {
-                let size = hm.stiffness.nrows();
-                let mut rhs = Mat::<f64>::zeros(size, cols);
+        let responses: Vec<Mat<f64>> = (0..=z / 2)
+            .map(|h| {
+                let doubled = phase_of_harmonic(h, z).0;
+                let mut rhs = Mat::<f64>::zeros(if doubled { 2 * n } else { n }, cols);
                 for (k, f) in &loaded {
-                    let (s, c) = self.phase(hm.harmonic, *k);
+                    let (s, c) = self.phase(h, *k);
                     for j in 0..cols {
                         for d in 0..n {
                             rhs[(d, j)] += c * f[(d, j)];
-                            if hm.doubled {
+                            if doubled {
                                 rhs[(n + d, j)] -= s * f[(d, j)];
                             }
                         }
                     }
                 }
-                factor.solve_block(&mut rhs);
+                self.solve_harmonic(h, &mut rhs);
                 rhs
             })
             .collect();
         b.par_col_chunks_mut(1).enumerate().for_each(|(j, mut column)| {
             let mut gear = vec![0.0; n * z];
-            for ((hm, _), u) in self.harmonics.iter().zip(&responses) {
-                let weight = if hm.doubled { 2.0 } else { 1.0 } / z as f64;
+            for (h, u) in responses.iter().enumerate() {
+                let weight = if phase_of_harmonic(h, z).0 { 2.0 } else { 1.0 } / z as f64;
                 let vector: Vec<f64> = (0..u.nrows()).map(|r| u[(r, j)]).collect();
-                self.expand(hm, &vector, &mut gear, weight);
+                self.expand(h, &vector, &mut gear, weight);
             }
             for (r, v) in gear.into_iter().enumerate() {
                 column[(r, 0)] = v;

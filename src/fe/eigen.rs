@@ -3,7 +3,7 @@
 //! under a cap on the block steps; residual norms reported; and a Sturm count — the negative
 //! pivots of an LDLᵀ of K − σM — proving that no eigenvalue below σ was missed (design §4.2).
 
-use super::assembly::{symmetric_times_block, Cholesky};
+use super::assembly::{symmetric_times_block, Cholesky, LinearSolve};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
@@ -86,8 +86,26 @@ pub fn lowest_modes_factored(
     count: usize,
     tolerance: f64,
     max_iterations: usize,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<Modes, String> {
+    let (mut modes, sigma) = lowest_modes_before_sturm_count(k, m, chol, count, tolerance, max_iterations, progress)?;
+    modes.sturm_count = sturm_count_factored(k, m, sigma, chol)?;
+    Ok(modes)
+}
+
+/// As [`lowest_modes_factored`] without the Sturm count (`sturm_count` left 0): the modes and
+/// the shift σ, midway between λ_count and the next distinct Ritz value, where it is to be
+/// taken. For a caller that counts at a shift of its own (the gear by harmonics counts once, at
+/// the gear's shift, on every harmonic).
+pub fn lowest_modes_before_sturm_count(
+    k: &SparseColMat<usize, f64>,
+    m: &SparseColMat<usize, f64>,
+    chol: &dyn LinearSolve,
+    count: usize,
+    tolerance: f64,
+    max_iterations: usize,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<(Modes, f64), String> {
     let n = k.nrows();
     if count == 0 || count > n {
         return Err(format!("cannot compute {count} modes of a {n}-DOF model"));
@@ -188,17 +206,19 @@ pub fn lowest_modes_factored(
     let sigma = 0.5 * (values[count - 1] + values[next]);
     let expected = values.iter().filter(|&&l| l < sigma).count();
     // The Krylov space (V, KV, MV: three n × (steps·block) arrays) is done with: freed before
-    // the LDLᵀ, whose factor is as large as K's Cholesky factor, is allocated.
+    // the Sturm LDLᵀ, whose factor is as large as K's Cholesky factor, is allocated.
     drop((v, kv, mv));
-    let sturm = sturm_count_factored(k, m, sigma, chol)?;
-    Ok(Modes {
-        eigenvalues: values[..count].to_vec(),
-        vectors: x,
-        residuals,
-        iterations: steps,
-        sturm_count: sturm,
-        ritz_values_below_shift: expected,
-    })
+    Ok((
+        Modes {
+            eigenvalues: values[..count].to_vec(),
+            vectors: x,
+            residuals,
+            iterations: steps,
+            sturm_count: 0,
+            ritz_values_below_shift: expected,
+        },
+        sigma,
+    ))
 }
 
 /// Y with V's span removed and its columns made M-orthonormal (VᵀMY = 0, YᵀMY = I), returned
@@ -309,6 +329,12 @@ fn shifted(
 /// is A's whenever the factorization exists). faer keeps D on the factor's diagonal: first in
 /// each column of a simplicial factor, on the diagonal of each supernode's top block otherwise.
 fn negative_pivots_of_ldlt(symbolic: &SymbolicCholesky<usize>, a: &SparseColMat<usize, f64>) -> Result<usize, String> {
+    Ok(negative_pivots(symbolic, &ldlt_values(symbolic, a)?))
+}
+
+/// The values of the LDLᵀ factor of A (no pivoting) on a symbolic analysis of A's pattern:
+/// for the inertia (`negative_pivots`) and for solves (faer's `LdltRef`).
+pub fn ldlt_values(symbolic: &SymbolicCholesky<usize>, a: &SparseColMat<usize, f64>) -> Result<Vec<f64>, String> {
     let mut values = vec![0.0; symbolic.len_val()];
     let par = get_global_parallelism();
     let mut buffer = MemBuffer::new(symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()));
@@ -323,10 +349,15 @@ fn negative_pivots_of_ldlt(symbolic: &SymbolicCholesky<usize>, a: &SparseColMat<
             Default::default(),
         )
         .map_err(|e| format!("LDLᵀ of K − σM failed (σ on an eigenvalue?): {e:?}"))?;
-    Ok(match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => (0..a.nrows()).filter(|&j| values[s.col_ptr()[j]] < 0.0).count(),
+    Ok(values)
+}
+
+/// The negative entries of D of an LDLᵀ factor (`ldlt_values`): the negative eigenvalues of A.
+pub fn negative_pivots(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> usize {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => (0..symbolic.nrows()).filter(|&j| values[s.col_ptr()[j]] < 0.0).count(),
         SymbolicCholeskyRaw::Supernodal(s) => {
-            let factor = SupernodalLdltRef::new(s, &values);
+            let factor = SupernodalLdltRef::new(s, values);
             (0..s.n_supernodes())
                 .map(|i| {
                     let block = factor.supernode(i).val();
@@ -334,7 +365,7 @@ fn negative_pivots_of_ldlt(symbolic: &SymbolicCholesky<usize>, a: &SparseColMat<
                 })
                 .sum()
         }
-    })
+    }
 }
 
 #[cfg(test)]

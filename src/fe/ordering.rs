@@ -41,6 +41,17 @@ pub fn nested_dissection(mesh: &Mesh, dofs: &DofMap) -> Result<Ordering, String>
             }
         }
     }
+    nested_dissection_of_nodes(neighbours, |node| (0..3).map(|c| free_nodes[node] + c).collect())
+}
+
+/// Nested-dissection ordering of the DOFs of a node graph (`neighbours[i]`: the nodes node i
+/// shares an element with, repeats allowed), each node's DOFs (`node_dofs`) kept together:
+/// METIS orders the nodes, the DOFs follow.
+pub fn nested_dissection_of_nodes(
+    mut neighbours: Vec<Vec<i32>>,
+    node_dofs: impl Fn(usize) -> Vec<usize>,
+) -> Result<Ordering, String> {
+    let m = neighbours.len();
     let mut xadj = Vec::with_capacity(m + 1);
     let mut adjncy = Vec::new();
     xadj.push(0i32);
@@ -67,14 +78,8 @@ pub fn nested_dissection(mesh: &Mesh, dofs: &DofMap) -> Result<Ordering, String>
     if status != metis_sys::rstatus_et_METIS_OK {
         return Err(format!("METIS_NodeND failed with status {status}"));
     }
-    // METIS: the new node i is the old node perm[i]. Expand to DOF triples.
-    let forward: Vec<usize> = perm
-        .iter()
-        .flat_map(|&old| {
-            let first = free_nodes[old as usize];
-            (0..3).map(move |c| first + c)
-        })
-        .collect();
+    // METIS: the new node i is the old node perm[i]. Expand to the nodes' DOFs.
+    let forward: Vec<usize> = perm.iter().flat_map(|&old| node_dofs(old as usize)).collect();
     let mut inverse = vec![0; forward.len()];
     for (new, &old) in forward.iter().enumerate() {
         inverse[old] = new;

@@ -13,17 +13,23 @@ pub struct GearSizes {
     pub all_dofs: usize,
     /// Non-zeros of K over the free DOFs (the consistent mass has K's pattern).
     pub stiffness_nnz: usize,
-    /// Non-zeros of the Cholesky factor L of K (the Sturm check's LDLᵀ has as many), and the
-    /// numeric factorization's work space (bytes).
+    /// Non-zeros of the Cholesky factors the gear holds (the whole gear's L, or every
+    /// harmonic's: `fe::cyclic_symmetry`), and the numeric factorization's work space (bytes).
     pub factor_nnz: usize,
     pub factorization_scratch_bytes: usize,
+    /// Non-zeros of the Sturm check's LDLᵀ factors held at once (the whole gear's, as many as
+    /// L; or the largest harmonic's, one per thread) and of the harmonics' K_h and M_h (none
+    /// for the whole gear).
+    pub sturm_factor_nnz: usize,
+    pub harmonic_matrix_nnz: usize,
     /// Hexahedra: an assembly holds 24 × 24 triplets of each, twice (per element, then flat).
     pub elements: usize,
     /// Columns of ψ (loadable flank nodes) and of those solved (one tooth's).
     pub attachment_columns: usize,
     pub solved_columns: usize,
-    /// Columns of the eigen solver's Krylov space (each of V, KV, MV) and modes probed.
-    pub krylov_columns: usize,
+    /// Entries of the eigen solver's arrays held at once besides the modes: the Krylov space
+    /// (V, KV, MV; by harmonics one space per thread and the whole modes' K and M products).
+    pub krylov_entries: usize,
     pub probed_modes: usize,
     /// Fields the shapes stage holds at once (samples × shapes, Φ, and their mass products).
     pub shape_fields: usize,
@@ -56,15 +62,20 @@ impl GearSizes {
         let assembly = 2.0 * 24.0 * 576.0 * self.elements as f64;
         let basis = F64 * n * self.attachment_columns as f64;
         let modes = F64 * n * self.probed_modes as f64;
-        // Eigen stage: the free mass, the Krylov space (V, KV, MV), then — the space freed — the
-        // Sturm LDLᵀ, as large as L, with its work space.
-        let eigen = stiffness + modes + (3.0 * F64 * n * self.krylov_columns as f64).max(factor + scratch);
+        // Eigen stage: the free mass, the Krylov space, then — the space freed — the Sturm
+        // LDLᵀ with its work space.
+        let sturm = F64 * self.sturm_factor_nnz as f64 + scratch;
+        let eigen = stiffness + modes + (F64 * self.krylov_entries as f64).max(sturm);
         // Attachment stage: ψ, the solved tooth's columns, one block of K·ψ (with the two
         // transposes of `assembly::symmetric_times_block`).
         let attachment =
             modes + basis + F64 * n * (self.solved_columns as f64 + 3.0 * super::svd::PROJECTION_BLOCK as f64);
         GearMemory {
-            fe_stage_peak: stiffness + full_mass + factor + eigen.max(attachment).max(scratch).max(assembly),
+            fe_stage_peak: stiffness
+                + full_mass
+                + SPARSE_ENTRY * self.harmonic_matrix_nnz as f64
+                + factor
+                + eigen.max(attachment).max(scratch).max(assembly),
             kept: stiffness + full_mass + basis + F64 * big_n * self.probed_modes as f64,
             shapes_stage: F64 * big_n * self.shape_fields as f64,
         }
@@ -142,7 +153,9 @@ mod tests {
             elements: 30_000 * scale,
             attachment_columns: 400,
             solved_columns: 100,
-            krylov_columns: 188,
+            sturm_factor_nnz: 40_000_000 * scale,
+            harmonic_matrix_nnz: 0,
+            krylov_entries: 3 * 188 * 100_000 * scale,
             probed_modes: 26,
             shape_fields: 440,
         }

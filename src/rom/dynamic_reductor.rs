@@ -29,6 +29,7 @@ use crate::dynamics::pmor::model::{
 use crate::dynamics::pmor::quasi_static::Condensation;
 use crate::fe::assembly::{self, DofMap};
 use crate::fe::clamped_gear::ClampedGear;
+use crate::fe::cyclic_symmetry::{CyclicGear, FactoredCyclicGear};
 use crate::fe::eigen;
 use crate::fe::gear_mesh::{GearMesh, MeshSpec};
 use crate::fe::hex8::Formulation;
@@ -207,10 +208,31 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// How a gear's stiffness is factorized: by harmonics where its mesh is cyclic (every mesh
+/// `fe::gear_mesh` makes), the whole gear otherwise.
+enum Solver {
+    Harmonics(CyclicGear),
+    Whole(crate::fe::assembly::CholeskyAnalysis),
+}
+
+enum Factored {
+    Harmonics(FactoredCyclicGear),
+    Whole(crate::fe::assembly::Cholesky),
+}
+
+impl Factored {
+    fn solver(&self) -> &dyn crate::fe::assembly::LinearSolve {
+        match self {
+            Factored::Harmonics(f) => f,
+            Factored::Whole(f) => f,
+        }
+    }
+}
+
 /// One gear before its factorization: what the memory estimate is made from.
 struct PreparedGear {
     model: ClampedGear,
-    analysis: crate::fe::assembly::CholeskyAnalysis,
+    analysis: Solver,
     grid: FlankGrid,
     sizes: GearSizes,
 }
@@ -265,7 +287,10 @@ pub fn build_dynamic_model(
     let prepare = |i: usize, gear: &crate::gear::Gear| -> Result<PreparedGear, String> {
         progress(format!("gear {}: FE model", i + 1));
         let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
-        let analysis = model.analyse()?;
+        let analysis = match CyclicGear::new(&model)? {
+            Some(cyclic) => Solver::Harmonics(cyclic),
+            None => Solver::Whole(model.analyse()?),
+        };
         let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
         let solved_columns = match (options.contact, super::attachment::teeth_from_the_first(&model.mesh, &grid)) {
             (FlankContact::Hertz, Some(_)) => grid.len() / grid.teeth.len(),
@@ -275,16 +300,41 @@ pub fn build_dynamic_model(
         let probed_modes = options.modes + 6;
         // The shapes stage's fields at its fullest, nodal fields each (`shape_fields` below).
         let (n_theta, n_t) = (options.angles, 2 * (options.rom_torques_nm.len() + options.sharing_shapes));
+        let threads = rayon::current_num_threads();
+        let (factor_nnz, factorization_scratch_bytes, sturm_factor_nnz, harmonic_matrix_nnz, krylov_entries) =
+            match &analysis {
+                Solver::Whole(a) => {
+                    let k = a.factor_nnz();
+                    (k, a.factorization_scratch_bytes(), k, 0, 3 * n * eigen::krylov_capacity(probed_modes, n))
+                }
+                // The harmonics' eigenproblems run one per thread, each with its Krylov space
+                // and its real-form K_h and M_h; the whole modes' K and M products are formed
+                // once all are done. The interior factor and the dense edge parts and Schur
+                // factors are held throughout; the Sturm count adds an LDLᵀ of the interior.
+                Solver::Harmonics(c) => {
+                    let size = 2 * c.sector_dofs();
+                    let krylov = threads * 3 * size * eigen::krylov_capacity(probed_modes, size);
+                    (
+                        c.factor_nnz() + c.dense_entries(),
+                        c.factorization_scratch_bytes(),
+                        c.factor_nnz(),
+                        c.matrix_nnz() * (1 + 4 * threads),
+                        krylov.max(4 * n * probed_modes),
+                    )
+                }
+            };
         let sizes = GearSizes {
             free_dofs: n,
             all_dofs: model.dofs.free.len(),
             stiffness_nnz: model.stiffness.compute_nnz(),
-            factor_nnz: analysis.factor_nnz(),
-            factorization_scratch_bytes: analysis.factorization_scratch_bytes(),
+            factor_nnz,
+            factorization_scratch_bytes,
+            sturm_factor_nnz,
+            harmonic_matrix_nnz,
             elements: model.mesh.mesh.elements.len(),
             attachment_columns: grid.len(),
             solved_columns,
-            krylov_columns: eigen::krylov_capacity(probed_modes, n),
+            krylov_entries,
             probed_modes,
             shape_fields: shape_fields(n_theta, n_t, probed_modes),
         };
@@ -293,13 +343,24 @@ pub fn build_dynamic_model(
     let gear_fe = |i: usize, prepared: PreparedGear| -> Result<GearFe, String> {
         let PreparedGear { model, analysis, grid, sizes } = prepared;
         let solved_columns = sizes.solved_columns;
-        let factor = analysis.factorize(&model.stiffness)?;
-        progress(format!("gear {}: eigenmodes", i + 1));
+        let factor = match analysis {
+            Solver::Harmonics(c) => Factored::Harmonics(c.factorize()?),
+            Solver::Whole(a) => Factored::Whole(a.factorize(&model.stiffness)?),
+        };
         let n_nodes = model.mesh.mesh.nodes.len();
         let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
         let mass = model.dofs.restrict(&mass_full);
         let probe = options.modes + 6;
-        let modes = eigen::lowest_modes_factored(&model.stiffness, &mass, &factor, probe, 1e-10, 400, |_, _| {})?;
+        let modes = match &factor {
+            Factored::Harmonics(c) => {
+                progress(format!("gear {}: eigenmodes by {} harmonics", i + 1, model.mesh.teeth / 2 + 1));
+                c.lowest_modes(&model.stiffness, &mass, probe, 1e-10, 400)?
+            }
+            Factored::Whole(f) => {
+                progress(format!("gear {}: eigenmodes", i + 1));
+                eigen::lowest_modes_factored(&model.stiffness, &mass, f, probe, 1e-10, 400, |_, _| {})?
+            }
+        };
         if modes.sturm_count != modes.ritz_values_below_shift {
             return Err(format!("gear {}: the eigen solver missed a mode (Sturm count)", i + 1));
         }
@@ -325,13 +386,13 @@ pub fn build_dynamic_model(
                     solved_columns
                 ));
                 let (reduced, reconstructor, report) =
-                    pmor_hertz(&model, &factor, grid, options.depth_m, options.p_en, |_| {})?;
+                    pmor_hertz(&model, factor.solver(), grid, options.depth_m, options.p_en, |_| {})?;
                 (reduced, reconstructor, report.n_sv)
             }
             FlankContact::Penalty { .. } => {
                 progress(format!("gear {}: standard CMS attachment modes ({} flank nodes)", i + 1, grid.len()));
                 let n = grid.len();
-                let (reduced, reconstructor) = standard_cms(&model, &factor, grid);
+                let (reduced, reconstructor) = standard_cms(&model, factor.solver(), grid);
                 (reduced, reconstructor, n)
             }
         };
