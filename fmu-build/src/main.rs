@@ -251,6 +251,10 @@ enum Command {
         /// Writes <stem>_gear1.vtu and <stem>_gear2.vtu with the mode shapes.
         #[arg(long)]
         vtk: Option<PathBuf>,
+        /// Solve the whole gear (its Cholesky factor and block Lanczos) instead of by harmonics
+        /// (one sector per nodal diameter, what the build uses): the independent reference.
+        #[arg(long)]
+        whole_gear: bool,
     },
     /// A PMOR-Hertz .fmu's reduced pair linearized about its static equilibrium under T₁, at mesh
     /// positions over a pitch: its lowest modes (natural frequency, damping ratio). What a
@@ -1364,25 +1368,38 @@ fn linearize_command(
     Ok(())
 }
 
-fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<PathBuf>) -> Result<()> {
+fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<PathBuf>, whole_gear: bool) -> Result<()> {
+    use gearfmu::fe::cyclic_symmetry::CyclicGear;
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
         let bar = spinner(format!("gear {}: meshing and assembling", i + 1));
         let model = ClampedGear::new(&pair, gear, &mesh_spec, Formulation::IncompatibleModes);
         let (gm, dofs, k, m) = (&model.mesh, &model.dofs, &model.stiffness, model.mass());
-        bar.set_message(format!("gear {}: block Lanczos ({} DOFs)", i + 1, dofs.n_free));
-        let chol = model.factorize().map_err(anyhow::Error::msg)?;
-        let modes = eigen::lowest_modes_factored(k, &m, &chol, count, 1e-10, 300, |it, converged| {
-            bar.set_message(format!("gear {}: block Lanczos step {it}, {converged}/{count} converged", i + 1))
-        })
-        .map_err(anyhow::Error::msg)?;
+        let cyclic = if whole_gear { None } else { CyclicGear::new(&model).map_err(anyhow::Error::msg)? };
+        let (modes, solver) = match cyclic {
+            Some(cyclic) => {
+                bar.set_message(format!("gear {}: {} harmonics ({} DOFs)", i + 1, cyclic.harmonics(), dofs.n_free));
+                let (harmonics, edge, sector) = (cyclic.harmonics(), cyclic.edge_dofs(), cyclic.sector_dofs());
+                let factored = cyclic.factorize().map_err(anyhow::Error::msg)?;
+                let modes = factored.lowest_modes(k, &m, count, 1e-10, 300).map_err(anyhow::Error::msg)?;
+                (modes, format!("by {harmonics} harmonics, sectors of {sector} DOFs with edges of {edge}"))
+            }
+            None => {
+                bar.set_message(format!("gear {}: block Lanczos ({} DOFs)", i + 1, dofs.n_free));
+                let chol = model.factorize().map_err(anyhow::Error::msg)?;
+                let modes = eigen::lowest_modes_factored(k, &m, &chol, count, 1e-10, 300, |it, converged| {
+                    bar.set_message(format!("gear {}: block Lanczos step {it}, {converged}/{count} converged", i + 1))
+                })
+                .map_err(anyhow::Error::msg)?;
+                (modes, format!("whole gear, {:.1} M non-zeros in K's Cholesky factor", chol.factor_nnz() as f64 * 1e-6))
+            }
+        };
         bar.finish_and_clear();
         println!(
-            "gear {} (z = {}, {} DOFs, {:.1} M non-zeros in K's Cholesky factor): {} block steps; Sturm count below the shift {} = Ritz values below it {}{}",
+            "gear {} (z = {}, {} DOFs, {solver}): {} block steps; Sturm count below the shift {} = Ritz values below it {}{}",
             i + 1,
             gear.teeth,
             dofs.n_free,
-            chol.factor_nnz() as f64 * 1e-6,
             modes.iterations,
             modes.sturm_count,
             modes.ritz_values_below_shift,
@@ -1393,7 +1410,7 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
             }
         );
         for (j, (f, r)) in modes.frequencies_hz().iter().zip(&modes.residuals).enumerate() {
-            println!("  mode {:>3}: {:>12.2} Hz   residual {:.1e}", j + 1, f, r);
+            println!("  mode {:>3}: {:>14.4} Hz   residual {:.1e}", j + 1, f, r);
         }
         if let Some(stem) = &vtk {
             let shapes: Vec<Vec<f64>> = (0..count)
@@ -1462,7 +1479,9 @@ fn main() {
         Command::Inspect { spec, json, mesh_law, resolution } => inspect(&spec, json, mesh_law, resolution),
         Command::Mesh { spec, resolution, vtk, png } => mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => tooth_stiffness_command(&spec, resolution),
-        Command::Modes { spec, count, resolution, vtk } => modes_command(&spec, count, resolution, vtk),
+        Command::Modes { spec, count, resolution, vtk, whole_gear } => {
+            modes_command(&spec, count, resolution, vtk, whole_gear)
+        }
         Command::Linearize { fmu, torque_nm, mesh_damping_ratio, positions, count } => {
             linearize_command(&fmu, torque_nm, mesh_damping_ratio, positions, count)
         }

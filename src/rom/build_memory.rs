@@ -22,7 +22,7 @@ pub struct GearSizes {
     /// for the whole gear).
     pub sturm_factor_nnz: usize,
     pub harmonic_matrix_nnz: usize,
-    /// Hexahedra: an assembly holds 24 × 24 triplets of each, twice (per element, then flat).
+    /// Hexahedra.
     pub elements: usize,
     /// Columns of ψ (loadable flank nodes) and of those solved (one tooth's).
     pub attachment_columns: usize,
@@ -58,8 +58,9 @@ impl GearSizes {
         let full_mass = stiffness * big_n / n;
         let factor = F64 * self.factor_nnz as f64;
         let scratch = self.factorization_scratch_bytes as f64;
-        // The full mass is assembled with K and L held: its triplets (row, column, value).
-        let assembly = 2.0 * 24.0 * 576.0 * self.elements as f64;
+        // The full mass is assembled with K and L held: its pattern, values and one chunk of
+        // element matrices (`fe::assembly`).
+        let assembly = stiffness * big_n / n + F64 * 576.0 * 4096.0;
         let basis = F64 * n * self.attachment_columns as f64;
         let modes = F64 * n * self.probed_modes as f64;
         // Eigen stage: the free mass, the Krylov space, then — the space freed — the Sturm

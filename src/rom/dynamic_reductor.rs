@@ -238,21 +238,21 @@ struct PreparedGear {
 }
 
 /// Nodal fields the shapes stage holds at its fullest, for n_θ samples of n_t shapes and n_k
-/// modes. A sparse block product (`assembly::symmetric_times_block`) holds its input, its
-/// transpose, its output's transpose and its output. While the stiffness products are formed:
-/// the cleaned samples, the stored ones (n_θ + 5), their free-DOF copies and a product of that
-/// size with the columns copied out; while the Gram products are formed: the cleaned and stored
-/// samples and a product over the fields [Gx | Φ | S]; while the raw samples are formed: three
-/// copies of them (the product with the basis, expanded, turned); while cleaning: the raw
+/// modes. The Gram products (`assembly::symmetric_gram`) hold their fields and one block of the
+/// sparse product with its two transposes. While the stiffness Gram is formed: the cleaned
+/// samples, the stored ones (n_θ + 5) and their free-DOF copy; while the mass Gram is formed:
+/// the cleaned and stored samples and the fields [Gx | Φ | S]; while the raw samples are formed:
+/// three copies of them (the product with the basis, expanded, turned); while cleaning: the raw
 /// samples, two cleaned copies and one sample's product.
 fn shape_fields(n_theta: usize, n_t: usize, n_k: usize) -> usize {
     let stored = (n_theta + 5) * n_t;
     let fields = 1 + n_k + stored;
-    let stiffness_products = n_theta * n_t + stored + 6 * stored;
-    let gram = n_theta * n_t + stored + 4 * fields;
+    let block = 3 * assembly::GRAM_BLOCK;
+    let stiffness_gram = n_theta * n_t + 2 * stored + block;
+    let mass_gram = n_theta * n_t + stored + fields + block;
     let raw = 3 * (n_theta + 1) * n_t;
     let cleaning = (n_theta + 1) * n_t + 2 * n_theta * n_t + 5 * n_t;
-    stiffness_products.max(gram).max(raw).max(cleaning)
+    stiffness_gram.max(mass_gram).max(raw).max(cleaning)
 }
 
 /// One gear's FE side during the build.
@@ -648,24 +648,24 @@ pub fn build_dynamic_model(
         let gx = generator(&x);
         let fields: Vec<&Vec<f64>> = std::iter::once(&gx).chain(&g.phi).chain(stored.iter().flatten()).collect();
         let f = Mat::from_fn(gx.len(), fields.len(), |r, c| fields[c][r]);
-        let mf = assembly::symmetric_times_block(&g.mass_full, f.as_ref());
-        let gram = f.transpose() * &mf;
-        drop((f, mf));
+        let gram = assembly::symmetric_gram(&g.mass_full, f.as_ref());
+        drop(f);
         let sc = |a: usize, t: usize| 1 + n_k + a * n_t + t;
         let phic = |j: usize| 1 + j;
         // Stiffness products of the shapes (free DOFs; the bore does not move).
         let dofs = &g.model.dofs;
-        let free = |v: &[f64]| -> Vec<f64> {
-            let mut out = vec![0.0; dofs.n_free];
+        // SᵀKS over the stored shapes (free DOFs: the bore does not move).
+        let shapes: Vec<&Vec<f64>> = stored.iter().flatten().collect();
+        let mut shape_free = Mat::<f64>::zeros(dofs.n_free, shapes.len());
+        for (c, field) in shapes.iter().enumerate() {
             for (d, slot) in dofs.free.iter().enumerate() {
                 if let Some(e) = slot {
-                    out[*e] = v[d];
+                    shape_free[(*e, c)] = field[d];
                 }
             }
-            out
-        };
-        let shape_free: Vec<Vec<f64>> = stored.iter().flat_map(|s| s.iter().map(|f| free(f))).collect();
-        let k_shapes = sparse_times_fields(&g.model.stiffness, &shape_free);
+        }
+        let k_gram = assembly::symmetric_gram(&g.model.stiffness, shape_free.as_ref());
+        drop(shape_free);
 
         let sample: Vec<SampleInvariants> = (0..n_a)
             .map(|a| SampleInvariants {
@@ -686,8 +686,8 @@ pub fn build_dynamic_model(
                 pairs.push(Some(PairInvariants {
                     s_s: DMatrix::from_fn(n_t, n_t, |r, c| gram[(sc(a, r), sc(b, c))]),
                     k_ss: DMatrix::from_fn(n_t, n_t, |r, c| {
-                        0.5 * (dot(&shape_free[a * n_t + r], &k_shapes[b * n_t + c])
-                            + dot(&shape_free[b * n_t + c], &k_shapes[a * n_t + r]))
+                        let (ar, bc) = (a * n_t + r, b * n_t + c);
+                        0.5 * (k_gram[(ar, bc)] + k_gram[(bc, ar)])
                     }),
                 }));
             }
