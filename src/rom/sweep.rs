@@ -44,15 +44,15 @@ impl ReducedPair {
         let mut reports = Vec::new();
         for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
             let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
-            let factor = model.factorize()?;
+            let factor = model.static_solver()?;
             let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
             match method {
                 Method::PmorHertz { depth_m, p_en, .. } => {
-                    let (reduced, _, report) = pmor_hertz(&model, &factor, grid, depth_m, p_en, |n| progress(i, n))?;
+                    let (reduced, _, report) = pmor_hertz(&model, factor.as_ref(), grid, depth_m, p_en, |n| progress(i, n))?;
                     gears.push(reduced);
                     reports.push(report);
                 }
-                Method::Penalty { .. } => gears.push(standard_cms(&model, &factor, grid).0),
+                Method::Penalty { .. } => gears.push(standard_cms(&model, factor.as_ref(), grid).0),
             }
         }
         let gears: [ReducedGear; 2] = gears.try_into().map_err(|_| "two gears")?;

@@ -81,3 +81,31 @@ def test_fmpys_own_master_runs_the_pmor_fmu_through_the_resonance_at_odd_steps(g
                          output=["w_2", "dte", "contact_pairs"])
         assert abs(r["w_2"][-1] / w2 - 1.0) < 0.01, (f_mesh, r["w_2"][-1] / w2)
         assert np.any(r["contact_pairs"] == 0), "the resonance should lose contact"
+
+
+@pytest.fixture(scope="module")
+def small_helical_pmor(tmp_path_factory):
+    """The shipped automotive-size helical pair (examples/small_helical.toml), PMOR-Hertz on its
+    defaults: built here since issue 40 brought its build to about a minute and a half."""
+    from conftest import _fmu_build
+
+    path = tmp_path_factory.mktemp("small_helical") / "SmallHelical.fmu"
+    _fmu_build("build", "examples/small_helical.toml", "-o", str(path))
+    fmu = Fmu(str(path), "small_helical")
+    yield fmu
+    fmu.close()
+
+
+def test_the_small_helical_pair_at_speed_completes_and_holds_the_brakes_balance_speed(small_helical_pmor):
+    """Issue 40, Build 4 (issue 38's helical grid, reduced): at its rated 142 N·m, at the mesh
+    resonance (2.7 kHz, where the run-up's DTE peaks) and far above it (8 kHz), at 20 µs and
+    1 ms coupling, every case completes and holds ω₂ within 1 % of the brake's balance speed
+    (closed form c·ω₂* = T₁z₂/z₁)."""
+    failures = []
+    for f in (2700.0, 8000.0):
+        for h in (20e-6, 1e-3):
+            r = brake_case(small_helical_pmor, f, h, 142.0, t_end_s=0.02)
+            print(f"small helical {f:.0f} Hz, {h * 1e6:.0f} µs: ω₂ error {r.get('omega_2_error')}, {r['error'][:100]}")
+            if not r["completed"] or abs(r["omega_2_error"]) >= 0.01:
+                failures.append((f, h, r.get("omega_2_error"), r["error"][:200]))
+    assert not failures, failures
