@@ -121,7 +121,8 @@ fn assemble(
     let numbered: Vec<usize> = dofs.free.iter().flatten().cloned().collect();
     assert!(numbered.windows(2).all(|w| w[0] < w[1]), "free DOFs numbered in node order");
     // Free directions of each node, and the rank of direction r among them.
-    let free_count: Vec<usize> = (0..n_nodes).map(|n| (0..3).filter(|&c| dofs.free[3 * n + c].is_some()).count()).collect();
+    let free_count: Vec<usize> =
+        (0..n_nodes).map(|n| (0..3).filter(|&c| dofs.free[3 * n + c].is_some()).count()).collect();
     let rank = |b: usize, r: usize| (0..r).filter(|&c| dofs.free[3 * b + c].is_some()).count();
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n_nodes];
     for el in &mesh.elements {
@@ -165,7 +166,8 @@ fn assemble(
     const CHUNK: usize = 4096;
     for start in (0..mesh.elements.len()).step_by(CHUNK) {
         let end = (start + CHUNK).min(mesh.elements.len());
-        let matrices: Vec<hex8::Mat24> = (start..end).into_par_iter().map(|e| element(&mesh.element_coords(e))).collect();
+        let matrices: Vec<hex8::Mat24> =
+            (start..end).into_par_iter().map(|e| element(&mesh.element_coords(e))).collect();
         for (k, nodes) in matrices.iter().zip(&mesh.elements[start..end]) {
             for (ia, &a) in nodes.iter().enumerate() {
                 for (ib, &b) in nodes.iter().enumerate() {
@@ -426,13 +428,18 @@ mod tests {
     use super::*;
     use crate::fe::mesh::box_mesh;
 
+    /// The small steel box every test here assembles on (4 × 3 × 2 hexahedra).
+    fn steel_box() -> (Mesh, Material) {
+        let mesh = box_mesh([0.02, 0.01, 0.005], [4, 3, 2]);
+        (mesh, Material { youngs_modulus_pa: 210e9, poisson_ratio: 0.3, density_kg_m3: 7850.0 })
+    }
+
     /// The symmetric block product against faer's sparse × dense product (the library's, a
     /// different loop order), on the clamped box's stiffness and a block of 7 columns.
     #[test]
     fn the_symmetric_block_product_is_the_sparse_dense_product() {
         use faer::sparse::linalg::matmul::sparse_dense_matmul;
-        let mesh = box_mesh([0.02, 0.01, 0.005], [4, 3, 2]);
-        let material = Material { youngs_modulus_pa: 210e9, poisson_ratio: 0.3, density_kg_m3: 7850.0 };
+        let (mesh, material) = steel_box();
         let clamped: Vec<bool> = mesh.nodes.iter().map(|p| p[0] == 0.0).collect();
         let dofs = DofMap::new(mesh.nodes.len(), &clamped);
         let k = stiffness(&mesh, &material, Formulation::IncompatibleModes, &dofs);
@@ -453,8 +460,7 @@ mod tests {
     #[test]
     fn the_assembly_in_place_is_the_triplet_sum() {
         use faer::sparse::Triplet;
-        let mesh = box_mesh([0.02, 0.01, 0.005], [4, 3, 2]);
-        let material = Material { youngs_modulus_pa: 210e9, poisson_ratio: 0.3, density_kg_m3: 7850.0 };
+        let (mesh, material) = steel_box();
         let mut free = vec![None; mesh.dofs()];
         let mut n_free = 0;
         for (node, p) in mesh.nodes.iter().enumerate() {
@@ -474,7 +480,9 @@ mod tests {
             let nodes = mesh.elements[e];
             for i in 0..24 {
                 for j in 0..24 {
-                    if let (Some(r), Some(c)) = (dofs.free[3 * nodes[i / 3] + i % 3], dofs.free[3 * nodes[j / 3] + j % 3]) {
+                    if let (Some(r), Some(c)) =
+                        (dofs.free[3 * nodes[i / 3] + i % 3], dofs.free[3 * nodes[j / 3] + j % 3])
+                    {
                         triplets.push(Triplet::new(r, c, k[(i, j)]));
                     }
                 }
@@ -490,8 +498,7 @@ mod tests {
     /// full blocks and a partial one).
     #[test]
     fn the_blocked_gram_product_is_the_whole_one() {
-        let mesh = box_mesh([0.02, 0.01, 0.005], [4, 3, 2]);
-        let material = Material { youngs_modulus_pa: 210e9, poisson_ratio: 0.3, density_kg_m3: 7850.0 };
+        let (mesh, material) = steel_box();
         let dofs = DofMap::unclamped(mesh.nodes.len());
         let m = mass(&mesh, &material, &dofs);
         let f = Mat::from_fn(dofs.n_free, 70, |i, j| ((i * 37 + j * 11) % 17) as f64 - 8.0);
@@ -505,8 +512,7 @@ mod tests {
     /// the same element sums, entry by entry (a clamped face, so rows and columns drop out).
     #[test]
     fn restricting_the_full_mass_is_assembling_the_clamped_one() {
-        let mesh = box_mesh([0.02, 0.01, 0.005], [4, 3, 2]);
-        let material = Material { youngs_modulus_pa: 210e9, poisson_ratio: 0.3, density_kg_m3: 7850.0 };
+        let (mesh, material) = steel_box();
         let clamped: Vec<bool> = mesh.nodes.iter().map(|p| p[0] == 0.0).collect();
         assert!(clamped.iter().any(|&c| c) && !clamped.iter().all(|&c| c));
         let dofs = DofMap::new(mesh.nodes.len(), &clamped);

@@ -119,7 +119,8 @@ impl CyclicGear {
             return Ok(None);
         }
         // Every element is the image of one of sector 0's: the turned element sets are the mesh.
-        let mut images: std::collections::HashSet<[usize; 8]> = std::collections::HashSet::with_capacity(elements.len());
+        let mut images: std::collections::HashSet<[usize; 8]> =
+            std::collections::HashSet::with_capacity(elements.len());
         for k in 0..z as i64 {
             for &e in &first {
                 images.insert(elements[e].map(|n| gear.node_turned_by_teeth(n, k)));
@@ -227,9 +228,8 @@ impl CyclicGear {
         if (0..own_nodes.len()).any(|node| (0..3).any(|c| split.place[3 * node + c].0 != split.place[3 * node].0)) {
             return Ok(None);
         }
-        let ordering = super::ordering::nested_dissection_of_nodes(neighbours, |node| {
-            (0..3).map(|c| 3 * node + c).collect()
-        })?;
+        let ordering =
+            super::ordering::nested_dissection_of_nodes(neighbours, |node| (0..3).map(|c| 3 * node + c).collect())?;
         let interior_stiffness = block(&stiffness.own, &split, false, false);
         let interior_analysis = Cholesky::analyse(&interior_stiffness, Some(&ordering))?;
         Ok(Some(CyclicGear { layout, stiffness, mass, split, interior_stiffness, interior_analysis }))
@@ -282,9 +282,9 @@ impl CyclicGear {
             .into_par_iter()
             .map(|h| {
                 let (doubled, cos, sin) = phase_of_harmonic(h, z);
-                schur_complement(&condensed, doubled, cos, sin)
-                    .llt(Side::Lower)
-                    .map_err(|e| format!("harmonic {h}: Schur complement of the sector edge not positive definite: {e:?}"))
+                schur_complement(&condensed, doubled, cos, sin).llt(Side::Lower).map_err(|e| {
+                    format!("harmonic {h}: Schur complement of the sector edge not positive definite: {e:?}")
+                })
             })
             .collect::<Result<Vec<_>, String>>()?;
         Ok(FactoredCyclicGear { layout, stiffness, mass, split, interior, condensed, schur })
@@ -292,7 +292,12 @@ impl CyclicGear {
 }
 
 /// A's block on the interior or edge rows and columns (`rows_on_edge`, `cols_on_edge`).
-fn block(a: &SparseColMat<usize, f64>, split: &EdgeSplit, rows_on_edge: bool, cols_on_edge: bool) -> SparseColMat<usize, f64> {
+fn block(
+    a: &SparseColMat<usize, f64>,
+    split: &EdgeSplit,
+    rows_on_edge: bool,
+    cols_on_edge: bool,
+) -> SparseColMat<usize, f64> {
     let size = |edge: bool| if edge { split.edge.len() } else { split.interior.len() };
     let a = a.as_ref();
     let mut t = Vec::new();
@@ -460,7 +465,8 @@ impl SectorParts {
     fn harmonic(&self, doubled: bool, cos: f64, sin: f64) -> SparseColMat<usize, f64> {
         let n = self.own.nrows();
         let size = if doubled { 2 * n } else { n };
-        let mut t = Vec::with_capacity(if doubled { 2 } else { 1 } * (self.own.compute_nnz() + 4 * self.next.compute_nnz()));
+        let mut t =
+            Vec::with_capacity(if doubled { 2 } else { 1 } * (self.own.compute_nnz() + 4 * self.next.compute_nnz()));
         let mut both = |i: usize, j: usize, v: f64| {
             t.push(Triplet::new(i, j, v));
             if doubled {
@@ -509,19 +515,6 @@ fn times(x: &SparseColMat<usize, f64>, u: &Mat<f64>) -> Mat<f64> {
     out
 }
 
-/// Sparse a − σ·b (the same sector parts' pattern).
-fn shifted(a: &SparseColMat<usize, f64>, b: &SparseColMat<usize, f64>, sigma: f64) -> SparseColMat<usize, f64> {
-    let mut t = Vec::with_capacity(a.compute_nnz() + b.compute_nnz());
-    for (m, scale) in [(a.as_ref(), 1.0), (b.as_ref(), -sigma)] {
-        for j in 0..m.ncols() {
-            for (i, &v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
-                t.push(Triplet::new(i, j, scale * v));
-            }
-        }
-    }
-    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &t).expect("same shape")
-}
-
 /// One harmonic's real-form solve, for the Lanczos steps of that harmonic.
 struct HarmonicSolver<'a> {
     gear: &'a FactoredCyclicGear,
@@ -554,9 +547,8 @@ impl FactoredCyclicGear {
         let (n_i, n_b) = (self.split.interior.len(), self.split.edge.len());
         let c = &self.condensed;
         // Columns [Re | Im] of the interior and edge loads.
-        let gather = |dofs: &[usize]| {
-            Mat::from_fn(dofs.len(), parts * cols, |r, j| b[((j / cols) * n + dofs[r], j % cols)])
-        };
+        let gather =
+            |dofs: &[usize]| Mat::from_fn(dofs.len(), parts * cols, |r, j| b[((j / cols) * n + dofs[r], j % cols)]);
         let (mut zw, edge_load) = (gather(&self.split.interior), gather(&self.split.edge));
         self.interior.solve_block(&mut zw);
         let (t0, t1) = (transpose_times(&c.x0, &zw), transpose_times(&c.x1, &zw));
@@ -623,8 +615,8 @@ impl FactoredCyclicGear {
     /// for a pair's real form) plus those of the dense LDLᵀ of the edge's Schur complement of
     /// K_h − σM_h; summed over the harmonics.
     fn sturm_count(&self, sigma: f64) -> Result<usize, String> {
-        let own = shifted(&self.stiffness.own, &self.mass.own, sigma);
-        let next = shifted(&self.stiffness.next, &self.mass.next, sigma);
+        let own = eigen::shifted(&self.stiffness.own, &self.mass.own, sigma)?;
+        let next = eigen::shifted(&self.stiffness.next, &self.mass.next, sigma)?;
         let interior = block(&own, &self.split, false, false);
         let symbolic = self.interior.symbolic();
         let values = eigen::ldlt_values(symbolic, &interior)?;
@@ -639,9 +631,9 @@ impl FactoredCyclicGear {
             .into_par_iter()
             .map(|h| {
                 let (doubled, cos, sin) = phase_of_harmonic(h, z);
-                let schur = schur_complement(&condensed, doubled, cos, sin)
-                    .ldlt(Side::Lower)
-                    .map_err(|e| format!("harmonic {h}: LDLᵀ of the edge's K − σM failed (σ on an eigenvalue?): {e:?}"))?;
+                let schur = schur_complement(&condensed, doubled, cos, sin).ldlt(Side::Lower).map_err(|e| {
+                    format!("harmonic {h}: LDLᵀ of the edge's K − σM failed (σ on an eigenvalue?): {e:?}")
+                })?;
                 let d = schur.D();
                 let edge_negative = (0..d.dim()).filter(|&i| d[i] < 0.0).count();
                 Ok(if doubled { 2 } else { 1 } * interior_negative + edge_negative)
@@ -686,9 +678,17 @@ impl FactoredCyclicGear {
                     let m_h = self.mass.harmonic(doubled, cos, sin);
                     let solver = HarmonicSolver { gear: self, harmonic: h };
                     // Counted once below, at the gear's shift, not at each harmonic's own.
-                    eigen::lowest_modes_before_sturm_count(&k_h, &m_h, &solver, wanted[h], tolerance, max_iterations, |_, _| {})
-                        .map(|(modes, _)| modes)
-                        .map_err(|e| format!("harmonic {h}: {e}"))
+                    eigen::lowest_modes_before_sturm_count(
+                        &k_h,
+                        &m_h,
+                        &solver,
+                        wanted[h],
+                        tolerance,
+                        max_iterations,
+                        |_, _| {},
+                    )
+                    .map(|(modes, _)| modes)
+                    .map_err(|e| format!("harmonic {h}: {e}"))
                 })
                 .collect();
             for (h, modes) in unsolved.into_iter().zip(solved) {

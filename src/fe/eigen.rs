@@ -306,8 +306,8 @@ pub fn sturm_count_factored(
     negative_pivots_of_ldlt(chol.symbolic(), &shifted(k, m, sigma)?)
 }
 
-/// K − σM, assembled from both matrices' entries.
-fn shifted(
+/// K − σM, assembled from both matrices' entries (also the gear by harmonics' sector parts).
+pub fn shifted(
     k: &SparseColMat<usize, f64>,
     m: &SparseColMat<usize, f64>,
     sigma: f64,
