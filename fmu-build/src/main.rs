@@ -1368,7 +1368,13 @@ fn linearize_command(
     Ok(())
 }
 
-fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<PathBuf>, whole_gear: bool) -> Result<()> {
+fn modes_command(
+    spec: &Path,
+    count: usize,
+    resolution: Resolution,
+    vtk: Option<PathBuf>,
+    whole_gear: bool,
+) -> Result<()> {
     use gearfmu::fe::cyclic_symmetry::CyclicGear;
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
@@ -1391,7 +1397,10 @@ fn modes_command(spec: &Path, count: usize, resolution: Resolution, vtk: Option<
                     bar.set_message(format!("gear {}: block Lanczos step {it}, {converged}/{count} converged", i + 1))
                 })
                 .map_err(anyhow::Error::msg)?;
-                (modes, format!("whole gear, {:.1} M non-zeros in K's Cholesky factor", chol.factor_nnz() as f64 * 1e-6))
+                (
+                    modes,
+                    format!("whole gear, {:.1} M non-zeros in K's Cholesky factor", chol.factor_nnz() as f64 * 1e-6),
+                )
             }
         };
         bar.finish_and_clear();

@@ -48,7 +48,8 @@ impl ReducedPair {
             let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
             match method {
                 Method::PmorHertz { depth_m, p_en, .. } => {
-                    let (reduced, _, report) = pmor_hertz(&model, factor.as_ref(), grid, depth_m, p_en, |n| progress(i, n))?;
+                    let (reduced, _, report) =
+                        pmor_hertz(&model, factor.as_ref(), grid, depth_m, p_en, |n| progress(i, n))?;
                     gears.push(reduced);
                     reports.push(report);
                 }
