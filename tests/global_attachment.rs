@@ -130,9 +130,10 @@ fn partial_model_cut_at_the_lateral_reach_keeps_the_global_compliance() {
 /// The tooth periodicity of the FE gear (a conservation-free, solver-independent identity): the
 /// attachment modes of a flank grid on several teeth, solved for the first tooth and turned onto
 /// the others (`global_attachment_modes_of_teeth`), equal the modes solved node by node on every
-/// tooth, on both gears of a spur and of a helical pair, drive and coast flanks.
+/// tooth, on both gears of a spur and of a helical pair, drive and coast flanks. Their reduced
+/// stiffness from the partial models' section reactions equals the projection with K.
 #[test]
-fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth() {
+fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth_and_carry_their_cuts_reactions() {
     use gearfmu::contact::mesh_kinematics::{Flank, PairPlacement};
     use gearfmu::rom::attachment::{global_attachment_modes, global_attachment_modes_of_teeth};
     use gearfmu::rom::flank::FlankGrid;
@@ -157,7 +158,7 @@ fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth(
                 let direct =
                     global_attachment_modes(mesh, material, model.formulation, dofs, &chol, &grid.nodes, depth, |_| {})
                         .unwrap();
-                let turned = global_attachment_modes_of_teeth(
+                let turned_modes = global_attachment_modes_of_teeth(
                     &model.mesh,
                     material,
                     model.formulation,
@@ -168,6 +169,7 @@ fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth(
                     |_| {},
                 )
                 .unwrap();
+                let (direct_modes, direct, turned) = (&direct, &direct.psi, &turned_modes.psi);
                 let scale = (0..direct.ncols())
                     .flat_map(|j| (0..direct.nrows()).map(move |r| (r, j)))
                     .map(|(r, j)| direct[(r, j)].abs())
@@ -184,6 +186,24 @@ fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth(
                     worst
                 );
                 assert!(worst <= 1e-9 * scale, "{example} gear {} {flank:?}: turned modes differ by {worst:e}", i + 1);
+                // K·ψ_j = −r_j, the reaction of the cut (`GlobalAttachmentModes`): the reduced
+                // stiffness from the section reactions equals the Galerkin projection ψᵀKψ with the
+                // gear's stiffness, for the modes solved on every tooth and for the turned ones.
+                for (name, modes) in [("solved on every tooth", direct_modes), ("turned", &turned_modes)] {
+                    let galerkin = gearfmu::rom::svd::projected_stiffness(&model.stiffness, &modes.psi);
+                    let k_scale = (0..galerkin.ncols()).map(|j| galerkin[(j, j)]).fold(0.0, f64::max);
+                    let from_reactions = modes.reduced_stiffness(dofs);
+                    let worst = (0..galerkin.ncols())
+                        .flat_map(|j| (0..galerkin.nrows()).map(move |r| (r, j)))
+                        .map(|(r, j)| (from_reactions[(r, j)] - galerkin[(r, j)]).abs())
+                        .fold(0.0, f64::max);
+                    println!("  {name}: max |−ψᵀR − ψᵀKψ| = {worst:.2e} of max diag {k_scale:.2e}");
+                    assert!(
+                        worst <= 1e-10 * k_scale,
+                        "{example} gear {} {flank:?} {name}: the reactions' K_r differs from ψᵀKψ by {worst:e}",
+                        i + 1
+                    );
+                }
             }
         }
     }

@@ -37,6 +37,9 @@ pub fn partial_response(
     Ok(u)
 }
 
+/// Forces on some nodes of a gear: (gear node, force vector in N).
+pub type NodalForces = Vec<(usize, [f64; 3])>;
+
 /// The partial model's response on its own nodes only: a few hundred nodes of a gear of tens of
 /// thousands, so that one response per loadable node fits in memory at the paper's resolution.
 pub struct PartialResponse {
@@ -44,6 +47,10 @@ pub struct PartialResponse {
     pub nodes: Vec<usize>,
     /// Displacement of those nodes (node-major, 3 per node; zero on the clamped section).
     pub displacement: Vec<f64>,
+    /// The forces the clamped section exerts on the partial model's elements, K_sub·p on the
+    /// section's nodes (gear node numbers): what holds the cut. The gear's whole stiffness
+    /// times p is the load plus these, since the elements outside the cut see p = 0.
+    pub section_reaction: NodalForces,
 }
 
 impl PartialResponse {
@@ -143,10 +150,16 @@ impl PartialResponse {
             }
         }
         let dofs = DofMap::new(sub.nodes.len(), &clamped);
-        let k = assembly::stiffness(&sub, material, formulation, &dofs);
+        let k_all = assembly::stiffness(&sub, material, formulation, &DofMap::unclamped(sub.nodes.len()));
+        let k = dofs.restrict(&k_all);
         let local_load: Vec<(usize, [f64; 3])> = load.iter().map(|&(n, force)| (index[n], force)).collect();
         let displacement = dofs.expand(&Cholesky::new(&k)?.solve(&dofs.load_vector(&local_load)));
-        Ok(PartialResponse { nodes: local, displacement })
+        let forces = assembly::mul(&k_all, &displacement);
+        let section_reaction = (0..local.len())
+            .filter(|&i| clamped[i])
+            .map(|i| (local[i], [forces[3 * i], forces[3 * i + 1], forces[3 * i + 2]]))
+            .collect();
+        Ok(PartialResponse { nodes: local, displacement, section_reaction })
     }
 }
 
@@ -167,6 +180,51 @@ pub fn total_and_global_response(
     Ok((total, global))
 }
 
+/// Global attachment modes ψ_glob (free DOFs × n_c) and the stiffness forces they carry.
+///
+/// Column j is the clamped gear's response u_j to a unit load f_j along a flank node's inward
+/// normal, less its partial model's response p_j. The gear's stiffness times p_j is f_j plus the
+/// reaction r_j of the partial model's clamped section (`PartialResponse::section_reaction`),
+/// and K·u_j = f_j, so
+///
+///   K·ψ_j = −r_j:
+///
+/// the global mode is the gear's response to the forces that hold the cut at depth h, which is
+/// why it is smooth at the flank. Its reduced stiffness ψᵢᵀKψⱼ = −ψᵢᵀr_j is then a sum over a
+/// section's few hundred DOFs, not a product of the gear's stiffness with n_c fields (that
+/// product and its dense Gram were most of the attachment stage's time).
+pub struct GlobalAttachmentModes {
+    /// ψ_glob over the free DOFs, a column per loaded node.
+    pub psi: faer::Mat<f64>,
+    /// r_j of each column: the section's reaction of its partial model.
+    pub section_reactions: Vec<NodalForces>,
+}
+
+impl GlobalAttachmentModes {
+    /// K_r = ψᵀKψ = −ψᵀR (n_c × n_c), symmetrized (the halves differ by the solvers' round-off).
+    pub fn reduced_stiffness(&self, dofs: &DofMap) -> faer::Mat<f64> {
+        use rayon::prelude::*;
+        let n_c = self.psi.ncols();
+        let columns: Vec<Vec<f64>> = self
+            .section_reactions
+            .par_iter()
+            .map(|reaction| {
+                (0..n_c)
+                    .map(|i| {
+                        let psi_i = self.psi.col(i);
+                        -reaction
+                            .iter()
+                            .flat_map(|(node, force)| (0..3).map(move |c| (dofs.free[3 * node + c], force[c])))
+                            .filter_map(|(slot, f)| slot.map(|d| psi_i[d] * f))
+                            .sum::<f64>()
+                    })
+                    .collect()
+            })
+            .collect();
+        faer::Mat::from_fn(n_c, n_c, |i, j| 0.5 * (columns[j][i] + columns[i][j]))
+    }
+}
+
 /// Global attachment modes ψ_glob (free DOFs × nodes): for each loadable flank node, the response
 /// to a unit load along its inward normal, minus that load's partial model at depth h. The total
 /// responses are one block solve; the partial models run in parallel over nodes.
@@ -179,7 +237,7 @@ pub fn global_attachment_modes(
     nodes: &[(usize, [f64; 3])],
     depth_m: f64,
     progress: impl Fn(usize) + Sync,
-) -> Result<faer::Mat<f64>, String> {
+) -> Result<GlobalAttachmentModes, String> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
     let n_c = nodes.len();
@@ -201,6 +259,7 @@ pub fn global_attachment_modes(
             r
         })
         .collect();
+    let mut section_reactions = Vec::with_capacity(n_c);
     for (j, partial) in partials.into_iter().enumerate() {
         let partial = partial?;
         for (k, &n) in partial.nodes.iter().enumerate() {
@@ -210,8 +269,9 @@ pub fn global_attachment_modes(
                 }
             }
         }
+        section_reactions.push(partial.section_reaction);
     }
-    Ok(psi)
+    Ok(GlobalAttachmentModes { psi, section_reactions })
 }
 
 /// ψ_glob of a flank grid on several teeth of the gear mesh, solved for the first tooth's nodes
@@ -230,7 +290,7 @@ pub fn global_attachment_modes_of_teeth(
     flank: &super::flank::FlankGrid,
     depth_m: f64,
     progress: impl Fn(usize) + Sync,
-) -> Result<faer::Mat<f64>, String> {
+) -> Result<GlobalAttachmentModes, String> {
     use rayon::prelude::*;
     let solve_whole = |progress| {
         global_attachment_modes(
@@ -258,19 +318,39 @@ pub fn global_attachment_modes_of_teeth(
         depth_m,
         progress,
     )?;
+    // Column (t, j) is P^{-t} of the first tooth's column j (`GearMesh::rotate_by_teeth` by −t):
+    // the value at node turned back by t teeth, its vector turned on by t pitches. The bore is
+    // cyclic too, so a free DOF's source is free.
+    let pitch = 2.0 * std::f64::consts::PI / gear.teeth as f64;
     let mut psi = faer::Mat::zeros(dofs.n_free, flank.len());
     psi.as_mut().par_col_chunks_mut(1).enumerate().for_each(|(column, mut out)| {
-        let (slot, j) = (column / per_tooth, column % per_tooth);
-        let free: Vec<f64> = (0..dofs.n_free).map(|i| first[(i, j)]).collect();
-        let turned =
-            if slot == 0 { dofs.expand(&free) } else { gear.rotate_by_teeth(&dofs.expand(&free), -turns[slot]) };
-        for (d, slot) in dofs.free.iter().enumerate() {
-            if let Some(i) = slot {
-                out[(*i, 0)] = turned[d];
+        let (t, j) = (turns[column / per_tooth], column % per_tooth);
+        let (s, c) = (t as f64 * pitch).sin_cos();
+        let source = first.psi.col(j);
+        let value = |node: usize, k: usize| dofs.free[3 * node + k].map_or(0.0, |i| source[i]);
+        for node in 0..dofs.free.len() / 3 {
+            let from = gear.node_turned_by_teeth(node, -t);
+            let (x, y, z) = (value(from, 0), value(from, 1), value(from, 2));
+            for (k, v) in [c * x - s * y, s * x + c * y, z].into_iter().enumerate() {
+                if let Some(i) = dofs.free[3 * node + k] {
+                    out[(i, 0)] = v;
+                }
             }
         }
     });
-    Ok(psi)
+    // The reactions turn with their modes: the value at node m moves to node m turned on by t
+    // teeth.
+    let section_reactions = (0..flank.len())
+        .map(|column| {
+            let (t, j) = (turns[column / per_tooth], column % per_tooth);
+            let (s, c) = (t as f64 * pitch).sin_cos();
+            first.section_reactions[j]
+                .iter()
+                .map(|&(m, f)| (gear.node_turned_by_teeth(m, t), [c * f[0] - s * f[1], s * f[0] + c * f[1], f[2]]))
+                .collect()
+        })
+        .collect();
+    Ok(GlobalAttachmentModes { psi, section_reactions })
 }
 
 /// The teeth each tooth of a flank grid lies on from its first (mod z), where every tooth's nodes

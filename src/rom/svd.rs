@@ -5,9 +5,11 @@
 //! The paper prints the criterion as √(Σ₁^{n_sv}σᵢ²)/√(Σσᵢ²) < p_en/100, which read literally picks
 //! the largest n_sv still *below* the target; we take the smallest n_sv that reaches it (≥).
 //!
-//! ψ is the largest array of the build (n_FE × n_c: 1.2 GB for the small helical gear 2), so
-//! nothing here makes a second one: K·ψ is formed a block of columns at a time, and ψ·Ũ
-//! overwrites ψ a block of rows at a time.
+//! K_r comes in formed: from the partial models' section reactions where ψ are global attachment
+//! modes (`attachment::GlobalAttachmentModes::reduced_stiffness`, no product with K), or by
+//! [`projected_stiffness`]. ψ is the largest array of the build (n_FE × n_c: 1.2 GB for the small
+//! helical gear 2), so nothing here makes a second one: ψ·Ũ overwrites ψ a block of rows at a
+//! time, and the compressed basis' stiffness ŨᵀK_rŨ is formed in the small space.
 
 use crate::fe::assembly::symmetric_times_block;
 use faer::linalg::matmul::matmul;
@@ -20,6 +22,9 @@ use rayon::prelude::*;
 pub struct Compression {
     /// ψ_sv = ψ_glob·Ũ (free DOFs × n_sv).
     pub basis: Mat<f64>,
+    /// ψ_svᵀKψ_sv = ŨᵀK_rŨ (n_sv × n_sv), formed in the small space: diagonal (σ) up to how far
+    /// the SVD's Ũ is from K_r's eigenvectors.
+    pub stiffness: Mat<f64>,
     pub singular_values: Vec<f64>,
     pub n_sv: usize,
     /// The retained share √(Σ₁^{n_sv}σᵢ²)/√(Σσᵢ²).
@@ -68,11 +73,13 @@ pub fn right_multiply_in_place(a: &mut Mat<f64>, t: MatRef<'_, f64>) {
 /// energy spectrum is flat: the last 10⁻⁴ of the energy carries the peak-to-peak.
 pub const DEFAULT_P_EN: f64 = 0.999999;
 
-/// Compresses ψ (free DOFs × n_c) against stiffness K keeping the share `p_en` of the energy.
-pub fn compress(k: &SparseColMat<usize, f64>, mut psi: Mat<f64>, p_en: f64) -> Compression {
+/// Compresses ψ (free DOFs × n_c) whose stiffness K_r = ψᵀKψ is given (`projected_stiffness`,
+/// or `attachment::GlobalAttachmentModes::reduced_stiffness` without the product with K),
+/// keeping the share `p_en` of the energy.
+pub fn compress(reduced_stiffness: &Mat<f64>, mut psi: Mat<f64>, p_en: f64) -> Compression {
     let n_c = psi.ncols();
-    let k_r = projected_stiffness(k, &psi);
-    let k_r = DMatrix::from_fn(n_c, n_c, |i, j| k_r[(i, j)]);
+    assert!(reduced_stiffness.nrows() == n_c && reduced_stiffness.ncols() == n_c, "K_r is n_c × n_c");
+    let k_r = DMatrix::from_fn(n_c, n_c, |i, j| reduced_stiffness[(i, j)]);
     let svd = k_r.svd(true, false);
     let mut order: Vec<usize> = (0..n_c).collect();
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
@@ -91,5 +98,7 @@ pub fn compress(k: &SparseColMat<usize, f64>, mut psi: Mat<f64>, p_en: f64) -> C
     let u_tilde = Mat::from_fn(n_c, n_sv, |i, j| u[(i, order[j])]);
     let retained = sigma[..n_sv].iter().map(|s| s * s).sum::<f64>().sqrt() / total;
     right_multiply_in_place(&mut psi, u_tilde.as_ref());
-    Compression { basis: psi, singular_values: sigma, n_sv, retained }
+    let stiffness = u_tilde.transpose() * reduced_stiffness * &u_tilde;
+    let stiffness = Mat::from_fn(n_sv, n_sv, |i, j| 0.5 * (stiffness[(i, j)] + stiffness[(j, i)]));
+    Compression { basis: psi, stiffness, singular_values: sigma, n_sv, retained }
 }
