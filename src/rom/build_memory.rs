@@ -44,9 +44,11 @@ const SPARSE_ENTRY: f64 = 16.0;
 pub struct GearMemory {
     /// The highest the gear's FE stage (factor, eigenmodes, attachment modes) reaches.
     pub fe_stage_peak: f64,
-    /// What it keeps afterwards (K, the full mass, the reduction basis, Φ) until the shapes.
+    /// What it keeps afterwards until its shapes are made (K, the reduction basis, Φ).
     pub kept: f64,
-    /// Its shapes stage on top of what both gears keep.
+    /// What it keeps after its shapes (Φ).
+    pub kept_after_shapes: f64,
+    /// Its shapes stage on top of what it kept (the full mass and the fields).
     pub shapes_stage: f64,
 }
 
@@ -54,31 +56,34 @@ impl GearSizes {
     pub fn memory(&self) -> GearMemory {
         let (n, big_n) = (self.free_dofs as f64, self.all_dofs as f64);
         let stiffness = SPARSE_ENTRY * self.stiffness_nnz as f64;
-        // The full mass over all DOFs: K's pattern grown by the bore's rows and columns.
+        // The mass over the free DOFs has K's pattern; the full mass over all DOFs is K's
+        // pattern grown by the bore's rows and columns.
+        let mass = stiffness;
         let full_mass = stiffness * big_n / n;
         let factor = F64 * self.factor_nnz as f64;
         let scratch = self.factorization_scratch_bytes as f64;
-        // The full mass is assembled with K and L held: its pattern, values and one chunk of
-        // element matrices (`fe::assembly`).
-        let assembly = stiffness * big_n / n + F64 * 576.0 * 4096.0;
+        // The mass is assembled with K and L held: its pattern, values and one chunk of element
+        // matrices (`fe::assembly`).
+        let assembly = mass + F64 * 576.0 * 4096.0;
         let basis = F64 * n * self.attachment_columns as f64;
         let modes = F64 * n * self.probed_modes as f64;
         // Eigen stage: the free mass, the Krylov space, then — the space freed — the Sturm
         // LDLᵀ with its work space.
         let sturm = F64 * self.sturm_factor_nnz as f64 + scratch;
-        let eigen = stiffness + modes + (F64 * self.krylov_entries as f64).max(sturm);
-        // Attachment stage: ψ, the solved tooth's columns, one block of K·ψ (with the two
-        // transposes of `assembly::symmetric_times_block`).
-        let attachment =
-            modes + basis + F64 * n * (self.solved_columns as f64 + 3.0 * super::svd::PROJECTION_BLOCK as f64);
+        let eigen = mass + modes + (F64 * self.krylov_entries as f64).max(sturm);
+        // Attachment stage: ψ and the solved tooth's columns, with the work space of their solve
+        // (the harmonics' coefficients of as many columns); K_r comes from the cuts' reactions,
+        // with no product of K and ψ (`rom::attachment::GlobalAttachmentModes`).
+        let attachment = modes + basis + 2.0 * F64 * n * self.solved_columns as f64;
+        let phi = F64 * big_n * self.probed_modes as f64;
         GearMemory {
             fe_stage_peak: stiffness
-                + full_mass
                 + SPARSE_ENTRY * self.harmonic_matrix_nnz as f64
                 + factor
                 + eigen.max(attachment).max(scratch).max(assembly),
-            kept: stiffness + full_mass + basis + F64 * big_n * self.probed_modes as f64,
-            shapes_stage: F64 * big_n * self.shape_fields as f64,
+            kept: stiffness + basis + phi,
+            kept_after_shapes: phi,
+            shapes_stage: full_mass + F64 * big_n * self.shape_fields as f64,
         }
     }
 }
@@ -108,7 +113,8 @@ impl BuildMemory {
             Schedule::SideBySide => a.fe_stage_peak + b.fe_stage_peak,
             Schedule::OneAfterTheOther => a.fe_stage_peak.max(a.kept + b.fe_stage_peak),
         };
-        let shapes = a.kept + b.kept + a.shapes_stage.max(b.shapes_stage);
+        // Gear 1's shapes, then gear 2's: each frees its K and basis when done.
+        let shapes = (a.kept + a.shapes_stage + b.kept).max(a.kept_after_shapes + b.kept + b.shapes_stage);
         BASE_BYTES + fe.max(shapes)
     }
 

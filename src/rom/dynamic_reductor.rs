@@ -255,17 +255,24 @@ fn shape_fields(n_theta: usize, n_t: usize, n_k: usize) -> usize {
     stiffness_gram.max(mass_gram).max(raw).max(cleaning)
 }
 
-/// One gear's FE side during the build.
+/// One gear's FE side from its FE stage to the end of the build: the mesh and what the statics
+/// and the shapes need.
 struct GearFe {
-    model: ClampedGear,
+    mesh: GearMesh,
+    material: assembly::Material,
+    dofs: DofMap,
     reduced: ReducedGear,
-    reconstructor: Reconstructor,
-    /// Unclamped consistent mass (all DOFs).
-    mass_full: faer::sparse::SparseColMat<usize, f64>,
     /// Φ expanded to all DOFs.
     phi: Vec<Vec<f64>>,
     eigenvalues: Vec<f64>,
     n_sv: usize,
+}
+
+/// One gear's large arrays kept from its FE stage until its shapes are made, and freed then:
+/// the other gear's shapes stage does not hold them.
+struct GearFields {
+    stiffness: faer::sparse::SparseColMat<usize, f64>,
+    reconstructor: Reconstructor,
 }
 
 /// Builds the reduced pair. `progress(message)` reports the stages.
@@ -340,16 +347,17 @@ pub fn build_dynamic_model(
         };
         Ok(PreparedGear { model, analysis, grid, sizes })
     };
-    let gear_fe = |i: usize, prepared: PreparedGear| -> Result<GearFe, String> {
+    let gear_fe = |i: usize, prepared: PreparedGear| -> Result<(GearFe, GearFields), String> {
         let PreparedGear { model, analysis, grid, sizes } = prepared;
         let solved_columns = sizes.solved_columns;
         let factor = match analysis {
             Solver::Harmonics(c) => Factored::Harmonics(c.factorize()?),
             Solver::Whole(a) => Factored::Whole(a.factorize(&model.stiffness)?),
         };
-        let n_nodes = model.mesh.mesh.nodes.len();
-        let mass_full = assembly::mass(&model.mesh.mesh, &model.material, &DofMap::unclamped(n_nodes));
-        let mass = model.dofs.restrict(&mass_full);
+        // The mass over the free DOFs for the eigenmodes; the full one (the floating frame's
+        // kinetic energy) is assembled again in the shapes stage rather than held through the
+        // attachment stage, where the two gears' stages add up.
+        let mass = assembly::mass(&model.mesh.mesh, &model.material, &model.dofs);
         let probe = options.modes + 6;
         let modes = match &factor {
             Factored::Harmonics(c) => {
@@ -402,15 +410,11 @@ pub fn build_dynamic_model(
         // The end of this gear's own stages (the two gears run side by side: without it, the
         // last stage's cost could not be told from the other gear's).
         progress(format!("gear {}: reduced ({} DOFs)", i + 1, model.dofs.n_free));
-        Ok(GearFe {
-            model,
-            reduced,
-            reconstructor,
-            mass_full,
-            phi,
-            eigenvalues: modes.eigenvalues[..n_k].to_vec(),
-            n_sv,
-        })
+        let ClampedGear { mesh, material, dofs, stiffness, .. } = model;
+        Ok((
+            GearFe { mesh, material, dofs, reduced, phi, eigenvalues: modes.eigenvalues[..n_k].to_vec(), n_sv },
+            GearFields { stiffness, reconstructor },
+        ))
     };
     let (prepared1, prepared2) = rayon::join(|| prepare(0, &pair.gear1), || prepare(1, &pair.gear2));
     let (prepared1, prepared2) = (prepared1?, prepared2?);
@@ -432,7 +436,7 @@ pub fn build_dynamic_model(
     // The two gears' FE models, eigenmodes and attachment modes are independent: built side by
     // side, the sequential parts of one (assembly, the partial models' small factorizations)
     // overlap the other's parallel ones.
-    let fe = match schedule {
+    let built = match schedule {
         Schedule::SideBySide => {
             let (fe1, fe2) = rayon::join(|| gear_fe(0, prepared1), || gear_fe(1, prepared2));
             [fe1?, fe2?]
@@ -442,6 +446,7 @@ pub fn build_dynamic_model(
             [fe1, gear_fe(1, prepared2)?]
         }
     };
+    let (fe, mut kept): (Vec<GearFe>, Vec<Option<GearFields>>) = built.into_iter().map(|(g, f)| (g, Some(f))).unzip();
 
     // Static analyses over one mesh cycle (and one more sample, one pitch on, for the closure
     // check), for each torque.
@@ -510,7 +515,7 @@ pub fn build_dynamic_model(
     // Gear 1's half-turned pose is one pitch behind the exact image (its tooth k is tooth 1 − k
     // here): one more tooth rotation.
     let turn_back = |i: usize, wraps: i64, field: &[f64], half_turn: &[usize]| -> Vec<f64> {
-        let turned = fe[i].model.mesh.rotate_by_teeth(field, wraps + (i == 0) as i64);
+        let turned = fe[i].mesh.rotate_by_teeth(field, wraps + (i == 0) as i64);
         GearMesh::half_turn_field(half_turn, &turned)
     };
     // Gear i's raw shapes of sample s, as reduced coordinates and the whole teeth a coast
@@ -545,8 +550,10 @@ pub fn build_dynamic_model(
     for (i, g) in fe.iter().enumerate() {
         progress(format!("gear {}: shapes and invariants", i + 1));
         let gear = if i == 0 { &pair.gear1 } else { &pair.gear2 };
-        let gm = &g.model.mesh;
-        let m_times_all = |fields: &[Vec<f64>]| sparse_times_fields(&g.mass_full, fields);
+        let gm = &g.mesh;
+        let GearFields { stiffness, reconstructor } = kept[i].take().expect("each gear's fields are used once");
+        let mass_full = assembly::mass(&gm.mesh, &g.material, &DofMap::unclamped(gm.mesh.nodes.len()));
+        let m_times_all = |fields: &[Vec<f64>]| sparse_times_fields(&mass_full, fields);
         let n_torques = options.rom_torques_nm.len();
         let per_flank = n_torques + options.sharing_shapes;
         let n_t = 2 * per_flank;
@@ -557,7 +564,8 @@ pub fn build_dynamic_model(
         // once per field), then the coast fields turned back onto the gear.
         let coordinates: Vec<(Vec<f64>, Option<i64>)> = (0..=n_theta).flat_map(|s| raw_coordinates(i, s)).collect();
         let q: Vec<&[f64]> = coordinates.iter().map(|(q, _)| q.as_slice()).collect();
-        let displacements = g.reconstructor.displacements(&q);
+        let displacements = reconstructor.displacements(&q);
+        drop(reconstructor);
         let fields: Vec<Vec<f64>> = displacements
             .into_par_iter()
             .zip(coordinates.par_iter())
@@ -648,12 +656,12 @@ pub fn build_dynamic_model(
         let gx = generator(&x);
         let fields: Vec<&Vec<f64>> = std::iter::once(&gx).chain(&g.phi).chain(stored.iter().flatten()).collect();
         let f = Mat::from_fn(gx.len(), fields.len(), |r, c| fields[c][r]);
-        let gram = assembly::symmetric_gram(&g.mass_full, f.as_ref());
+        let gram = assembly::symmetric_gram(&mass_full, f.as_ref());
         drop(f);
         let sc = |a: usize, t: usize| 1 + n_k + a * n_t + t;
         let phic = |j: usize| 1 + j;
         // Stiffness products of the shapes (free DOFs; the bore does not move).
-        let dofs = &g.model.dofs;
+        let dofs = &g.dofs;
         // SᵀKS over the stored shapes (free DOFs: the bore does not move).
         let shapes: Vec<&Vec<f64>> = stored.iter().flatten().collect();
         let mut shape_free = Mat::<f64>::zeros(dofs.n_free, shapes.len());
@@ -664,8 +672,8 @@ pub fn build_dynamic_model(
                 }
             }
         }
-        let k_gram = assembly::symmetric_gram(&g.model.stiffness, shape_free.as_ref());
-        drop(shape_free);
+        let k_gram = assembly::symmetric_gram(&stiffness, shape_free.as_ref());
+        drop((shape_free, stiffness));
 
         let sample: Vec<SampleInvariants> = (0..n_a)
             .map(|a| SampleInvariants {
