@@ -3,7 +3,7 @@
 //! body, then the body in postcard. A wrong magic, version or checksum is refused with a message
 //! that says which, so a stale or damaged FMU fails at instantiate, never later.
 
-use crate::dynamics::elements::Element;
+use crate::dynamics::element_parameters::Element;
 use crate::dynamics::lumped::LumpedMesh;
 use crate::dynamics::pmor::model::PmorModel;
 use serde::{Deserialize, Serialize};

@@ -142,7 +142,8 @@ fn attachment_modes_turned_from_one_tooth_equal_the_modes_solved_on_every_tooth_
         let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
         let place = PairPlacement::new(&p);
         let depth = gearfmu::rom::reductor::contact_depth_m(&p);
-        let spec = MeshSpec { axial_slices: MeshSpec::axial_slices_for(&p, depth).max(2), ..Default::default() };
+        let spec =
+            MeshSpec { axial_slices: gearfmu::fe::gear_mesh::axial_slices_for(&p, depth).max(2), ..Default::default() };
         for (i, gear) in [&p.gear1, &p.gear2].into_iter().enumerate() {
             let model = ClampedGear::new(&p, gear, &spec, Formulation::IncompatibleModes);
             let chol = model.factorize().unwrap();

@@ -1157,7 +1157,7 @@ fn pair_and_mesh(spec_path: &Path, r: Resolution) -> Result<(GearPair, MeshSpec)
 /// keys it does not set (the spec's defaults without a fallback), then the command line's
 /// overrides. Where neither the
 /// spec nor the command line sets the axial slices, a helical pair gets as many as its contact
-/// depth h (`depth_mm`, default half the module) needs (`MeshSpec::axial_slices_for`).
+/// depth h (`depth_mm`, default half the module) needs (`fe::gear_mesh::axial_slices_for`).
 fn pair_and_mesh_or(
     spec_path: &Path,
     r: Resolution,
@@ -1191,7 +1191,7 @@ fn pair_and_mesh_or(
     let mut mesh = spec.mesh;
     if !slices_set {
         let depth_m = contact_depth_or_default(&pair, depth_mm);
-        mesh.axial_slices = mesh.axial_slices.max(MeshSpec::axial_slices_for(&pair, depth_m));
+        mesh.axial_slices = mesh.axial_slices.max(gearfmu::fe::gear_mesh::axial_slices_for(&pair, depth_m));
     }
     Ok((pair, mesh))
 }

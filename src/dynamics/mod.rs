@@ -2,6 +2,7 @@
 //! pair in `pmor`), each a `model_file::ModelKind`, and the FMU glue (`fmu`) that drives them.
 
 pub mod any_model;
+pub mod element_parameters;
 pub mod elements;
 pub mod fmu;
 pub mod iso6336;

@@ -40,16 +40,6 @@ impl ClampedGear {
         super::assembly::Cholesky::with_ordering(&self.stiffness, Some(&self.ordering()?))
     }
 
-    /// K's solver for static responses: the gear by harmonics where its mesh is cyclic (every
-    /// mesh `gear_mesh` makes: one sector's interior factor and an edge per harmonic), the whole
-    /// gear's Cholesky factor otherwise.
-    pub fn static_solver(&self) -> Result<Box<dyn super::assembly::LinearSolve>, String> {
-        Ok(match super::cyclic_symmetry::CyclicGear::new(self)? {
-            Some(cyclic) => Box::new(cyclic.factorize()?),
-            None => Box::new(self.factorize()?),
-        })
-    }
-
     /// The symbolic analysis of K with the nested-dissection ordering: the factor's size, before
     /// the numeric factorization (`CholeskyAnalysis::factorize`) allocates it.
     pub fn analyse(&self) -> Result<super::assembly::CholeskyAnalysis, String> {

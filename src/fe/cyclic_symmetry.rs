@@ -35,6 +35,16 @@ use faer::{Conj, Mat, Par, Side};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
+/// K's solver for static responses: the gear by harmonics where its mesh is cyclic (every mesh
+/// `gear_mesh` makes: one sector's interior factor and an edge per harmonic), the whole gear's
+/// Cholesky factor otherwise.
+pub fn static_solver(gear: &ClampedGear) -> Result<Box<dyn LinearSolve>, String> {
+    Ok(match CyclicGear::new(gear)? {
+        Some(cyclic) => Box::new(cyclic.factorize()?),
+        None => Box::new(gear.factorize()?),
+    })
+}
+
 /// Where sector 0's free DOFs sit in the whole gear, sector by sector.
 struct SectorLayout {
     teeth: usize,

@@ -12,85 +12,22 @@
 //! (right hand: counter-clockwise, seen from +z, as z grows). z sectors share their borders.
 
 use super::mesh::Mesh;
+pub use super::mesh_spec::{MeshSpec, ProfileGrading};
 use crate::gear::{Gear, GearPair};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// Mesh resolution (spec section `[mesh]`; every field has a default).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct MeshSpec {
-    /// Elements across the tooth thickness.
-    pub elements_across_tooth: usize,
-    /// Elements along the profile, root circle → tip.
-    pub elements_along_profile: usize,
-    /// Elements radially in the rim and web, bore → root circle.
-    pub elements_in_rim: usize,
-    /// Elements across the face width.
-    pub axial_slices: usize,
-    /// Spacing of the rows along the profile.
-    pub profile_grading: ProfileGrading,
+/// The fewest axial slices a helical pair of contact depth `depth_m` needs: a slice of length
+/// Δz shifts the helical flank by Δz·tan β_b along the transverse contact normal, and the
+/// partial models of depth h must reach past that, Δz·tan β_b < h; with the margin
+/// `SLICE_DEPTH_MARGIN` (1.8, the Kurokawa helical spec's 8 slices). 1 for a spur pair.
+pub fn axial_slices_for(pair: &GearPair, depth_m: f64) -> usize {
+    let shift = pair.face_width_m * pair.base_helix_angle_rad.tan();
+    (SLICE_DEPTH_MARGIN * shift / depth_m).ceil().max(1.0) as usize
 }
 
-/// How the element rows along the profile are spaced between the root circle and the tip.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ProfileGrading {
-    /// sin² spacing: fine at the root (fillet stresses) and at the tip, coarsest at mid-flank.
-    #[default]
-    RootAndTip,
-    /// Even spacing: the active flank resolved alike everywhere, which node-to-surface contact
-    /// needs (it sees the flank only at node rows).
-    Uniform,
-}
-
-impl MeshSpec {
-    /// The mesh of the PMOR-Hertz build where the spec has no `[mesh]` section: chosen by
-    /// measured accuracy. On the seed's example 3 (spur pair, BENCHMARKS "Convergence on
-    /// example 3", mesh rows) 10 across / 10 along the profile / 10 in the rim puts the DTE mean,
-    /// RMS and peak-to-peak within −0.1 / −1.5 / −0.5 % of 12/24/12's, where the coarse default
-    /// is −4.0 / −10.3 / −10.1 % off and 8/8/8 −1.1 / −2.4 / −1.6 %. The rows along the profile
-    /// set the .fmu's size (the flank rows of Φ and the shapes): 10 keeps it at 4.1 MB, 12 at
-    /// 4.7 MB, 16 would pass the 5 MB goal.
-    pub fn dynamic_default() -> Self {
-        MeshSpec { elements_across_tooth: 10, elements_along_profile: 10, elements_in_rim: 10, ..Self::default() }
-    }
-
-    /// The mesh of the standard PMOR reference (`--model pmor-penalty`) where the spec has no
-    /// `[mesh]` section: node-to-surface contact sees the flank only at its node rows, so the
-    /// rows along the profile are even and 24 (the dynamic default's 10 graded rows leave the
-    /// penalty statics' STE peak-to-peak 3.8 × PMOR-Hertz's at 185 N·m on the spur pair; 24
-    /// even rows bring its mean within 0.4 % and its peak-to-peak within 5 %, 36 rows move them
-    /// by 0.2 % and 5 %). The reference is then solved as well as the method it checks.
-    pub fn penalty_reference_default() -> Self {
-        MeshSpec { elements_along_profile: 24, profile_grading: ProfileGrading::Uniform, ..Self::dynamic_default() }
-    }
-
-    /// The fewest axial slices a helical pair of contact depth `depth_m` needs: a slice of length
-    /// Δz shifts the helical flank by Δz·tan β_b along the transverse contact normal, and the
-    /// partial models of depth h must reach past that, Δz·tan β_b < h; with the margin
-    /// `SLICE_DEPTH_MARGIN` (1.8, the Kurokawa helical spec's 8 slices). 1 for a spur pair.
-    pub fn axial_slices_for(pair: &crate::gear::GearPair, depth_m: f64) -> usize {
-        let shift = pair.face_width_m * pair.base_helix_angle_rad.tan();
-        (SLICE_DEPTH_MARGIN * shift / depth_m).ceil().max(1.0) as usize
-    }
-}
-
-/// Δz·tan β_b is kept below h / `SLICE_DEPTH_MARGIN` by `MeshSpec::axial_slices_for`.
+/// Δz·tan β_b is kept below h / `SLICE_DEPTH_MARGIN` by `axial_slices_for`.
 pub const SLICE_DEPTH_MARGIN: f64 = 1.8;
-
-impl Default for MeshSpec {
-    /// The coarse default (tests, quick studies, the statics and the lumped model's inspection).
-    fn default() -> Self {
-        MeshSpec {
-            elements_across_tooth: 4,
-            elements_along_profile: 8,
-            elements_in_rim: 4,
-            axial_slices: 4,
-            profile_grading: ProfileGrading::RootAndTip,
-        }
-    }
-}
 
 /// A flank node: which tooth, side and slice it belongs to, its outward unit normal and roll.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

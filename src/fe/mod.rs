@@ -4,10 +4,12 @@
 pub mod assembly;
 pub mod clamped_gear;
 pub mod cyclic_symmetry;
+pub mod dofs;
 pub mod eigen;
 pub mod gear_mesh;
 pub mod hex8;
 pub mod mesh;
+pub mod mesh_spec;
 pub mod ordering;
 pub mod profile_png;
 pub mod tooth_stiffness;

@@ -2,7 +2,7 @@
 //! graph of the mesh: the three DOFs of a node stay together, and the graph is 3× smaller than
 //! the matrix's. Nested dissection roughly halves nnz(L) against AMD on 3-D meshes (design §4.2).
 
-use super::assembly::DofMap;
+use super::dofs::DofMap;
 use super::mesh::Mesh;
 
 /// A permutation of the free DOFs: `forward[new] = old`, `inverse[old] = new`.

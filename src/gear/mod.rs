@@ -10,11 +10,13 @@ pub mod modification;
 pub mod rating;
 pub mod root_stress;
 pub mod spec;
+pub mod spec_error;
 
 use involute::{inv, inv_inverse};
 use serde::{Deserialize, Serialize};
-use spec::invalid;
-pub use spec::{HertzContact, PairSpec, SpecError};
+pub use spec::{HertzContact, PairSpec};
+use spec_error::invalid;
+pub use spec_error::SpecError;
 use std::f64::consts::PI;
 
 /// The normal modules a spec may give (mm): below, the tooth is finer than a 3 mm-class FE mesh

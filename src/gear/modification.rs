@@ -17,7 +17,7 @@
 //! The pair: a misalignment f_ma in the plane of action closes the +z end: −f_ma·z/b in gear 1's
 //! (the world's) z.
 
-use super::spec::{invalid, SpecError};
+use super::spec_error::{invalid, SpecError};
 use serde::{Deserialize, Serialize};
 
 /// The shape of a relief over its length.

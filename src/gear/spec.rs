@@ -3,24 +3,9 @@
 //! Units live in the key names (`module_mm`, `pressure_angle_deg`, …). The file is converted
 //! once, here, into SI (`PairSpec::load` → [`crate::gear::GearPair`]); nothing downstream sees mm.
 
+pub use super::spec_error::SpecError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-
-/// Errors of a spec: each names the field and the rule it broke.
-#[derive(Debug, thiserror::Error)]
-pub enum SpecError {
-    /// The OS error is the source, printed once by the caller's error chain, not twice.
-    #[error("cannot read spec file {path}")]
-    Io { path: String, source: std::io::Error },
-    #[error("spec is not valid TOML or has an unknown/missing key: {0}")]
-    Parse(String),
-    #[error("field `{field}`: {rule}")]
-    Invalid { field: String, rule: String },
-}
-
-pub(crate) fn invalid(field: &str, rule: impl Into<String>) -> SpecError {
-    SpecError::Invalid { field: field.to_string(), rule: rule.into() }
-}
 
 /// Hand of helix; irrelevant for spur gears (helix angle 0). The spec gives gear 1's hand; an
 /// external pair meshes only with opposite hands, so gear 2 has the other one.
@@ -176,7 +161,7 @@ pub struct PairSpec {
     pub operating: OperatingSpec,
     /// Finite element mesh resolution (defaults: the coarse test mesh).
     #[serde(default)]
-    pub mesh: crate::fe::gear_mesh::MeshSpec,
+    pub mesh: crate::fe::mesh_spec::MeshSpec,
 }
 
 fn one() -> f64 {

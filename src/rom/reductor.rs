@@ -212,7 +212,8 @@ pub fn pmor_hertz(
     // K_sv is formed in the small space (Ũᵀ K_r Ũ, scaled), not by projecting K again.
     let n = c.n_sv;
     let scaled = nalgebra::DMatrix::from_fn(n, n, |i, j| c.stiffness[(i, j)] * inverse_sqrt[i] * inverse_sqrt[j]);
-    let cholesky = scaled.clone().cholesky().ok_or("the reduced stiffness of the SVD basis is not positive definite")?;
+    let cholesky =
+        scaled.clone().cholesky().ok_or("the reduced stiffness of the SVD basis is not positive definite")?;
     let inverse_lt = cholesky
         .l()
         .transpose()

@@ -44,7 +44,7 @@ impl ReducedPair {
         let mut reports = Vec::new();
         for (i, gear) in [&pair.gear1, &pair.gear2].into_iter().enumerate() {
             let model = ClampedGear::new(pair, gear, mesh, Formulation::IncompatibleModes);
-            let factor = model.static_solver()?;
+            let factor = crate::fe::cyclic_symmetry::static_solver(&model)?;
             let grid = FlankGrid::contact_flank_in_reach(&model.mesh, i, Flank::Drive, &place, 0)?;
             match method {
                 Method::PmorHertz { depth_m, p_en, .. } => {
