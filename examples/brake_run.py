@@ -36,14 +36,14 @@ def brake_loop(slave, vr: dict, torque_nm: float, brake: float, t_end_s: float, 
                ramp_s: float) -> list[tuple[float, float, float, float]]:
     """T₁ rising as a haversine over `ramp_s` to `torque_nm`; τ₂ = −brake·ω₂ with ω₂ read at each
     step's start (explicit coupling). Returns rows (t, ω₁, ω₂, DTE) at the step ends."""
-    t, rows = 0.0, []
-    for _ in range(int(round(t_end_s / step_s))):
+    rows = []
+    for k in range(int(round(t_end_s / step_s))):
+        t = k * step_s  # the step's start; a running sum t += step_s is accepted too (round-off)
         rise = 1.0 if t >= ramp_s else 0.5 * (1.0 - math.cos(math.pi * t / ramp_s))
         w_2 = slave.getReal([vr["w_2"]])[0]
         slave.setReal([vr["tau_1"], vr["tau_2"]], [torque_nm * rise, -brake * w_2])
         slave.doStep(currentCommunicationPoint=t, communicationStepSize=step_s)
-        t += step_s
-        rows.append((t, *slave.getReal([vr["w_1"], vr["w_2"], vr["dte"]])))
+        rows.append((t + step_s, *slave.getReal([vr["w_1"], vr["w_2"], vr["dte"]])))
     return rows
 
 

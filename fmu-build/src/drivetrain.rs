@@ -169,13 +169,13 @@ pub struct DrivetrainOptions {
     #[arg(long, default_value_t = 2.0)]
     pub load_viscous_nms_per_rad: f64,
     /// The bodies' internal RK4 step (s).
-    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S)]
+    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S, allow_negative_numbers = true, value_parser = crate::positive_number)]
     pub max_step_s: f64,
     /// The communication step the file declares (s).
-    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S)]
+    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S, allow_negative_numbers = true, value_parser = crate::positive_number)]
     pub communication_step_s: f64,
     /// The stop time the file declares (s).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true, value_parser = crate::positive_number)]
     pub stop_time_s: f64,
 }
 
