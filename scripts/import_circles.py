@@ -91,13 +91,18 @@ class Crate:
         self.text = {m: strip_comments(p.read_text()) for m, p in self.modules.items()}
         self.items = {m: set(ITEM.findall(t)) | set(MACRO.findall(t)) for m, t in self.text.items()}
         self.reexports: dict[tuple[str, ...], dict[str, str]] = {}
+        self.globs: dict[tuple[str, ...], list[str]] = {}
         for m, t in self.text.items():
-            names = {}
+            names, globs = {}, []
             for vis, tree in USE.findall(t):
                 if vis:
                     for p in expand_use_tree(tree):
-                        names[p.rsplit("::", 1)[-1]] = p
+                        if p.endswith("::*"):
+                            globs.append(p[: -len("::*")])
+                        else:
+                            names[p.rsplit("::", 1)[-1]] = p
             self.reexports[m] = names
+            self.globs[m] = globs
 
     def resolve(self, module: tuple[str, ...], path: str, seen=()) -> tuple[str, ...] | None:
         """The module (file) that defines what `path`, written in `module`, names."""
@@ -127,6 +132,13 @@ class Crate:
             resolved = self.resolve(at, target, seen + ((at, name),))
             if resolved is not None:
                 return resolved
+        # A glob re-export (`pub use other::*`): the name may be defined there.
+        for glob in self.globs.get(at, ()):
+            if (at, glob) in seen:
+                continue
+            module = self.resolve(at, glob, seen + ((at, glob),))
+            if module is not None and name in self.items.get(module, ()):
+                return module
         return at
 
     def graph(self) -> dict[tuple[str, ...], set[tuple[str, ...]]]:

@@ -16,6 +16,9 @@ const ONLINE: [&str; 15] = [
     "src/dynamics/pmor/contact.rs",
     "src/dynamics/pmor/interpolation.rs",
     "src/dynamics/pmor/linear.rs",
+    "src/dynamics/pmor/condensation.rs",
+    "src/dynamics/pmor/contact_law.rs",
+    "src/dynamics/element_parameters.rs",
     "src/dynamics/any_model.rs",
     "src/dynamics/elements.rs",
 ];

@@ -26,7 +26,7 @@
 //! angles.
 
 use super::equations::Stencil;
-use super::model::{FlankContact, PmorModel};
+use super::model::PmorModel;
 use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
 
 /// Angle step of the central differences ∂α/∂θ at tip corners (rad).
@@ -279,41 +279,9 @@ pub enum Loading {
     Point,
 }
 
-/// Contact loads of the pair on both flanks; `restage` maps a gear's angle to its stencil (for
-/// the differences).
-/// The mesh damper: a viscous coefficient c (N·s/m) shared by the loaded sections in proportion
-/// to their Hertz tangent stiffness, each acting on its approach velocity α̇ = J·q̇ from the
-/// gears' rotation and body modes (θ̇, η̇_Φ) and never pulling: F_d = max(c_s·α̇, −F_s), so the
-/// section's force stays ≥ 0 and the damper's power F_d·α̇ ≥ 0. The contact shapes' velocities
-/// η̇_Ψ are left out on purpose: they are the stiff coordinates (the shapes against the Hertz
-/// contact near 100 kHz), and a damper on them makes those modes overdamped with a real
-/// eigenvalue near −c/m_shape ≈ −2·10⁶ s⁻¹ — an explicit step of 0.5 µs.
-pub fn contact_loads(
-    model: &PmorModel,
-    place: &PairPlacement,
-    poses: [&GearPose; 2],
-    restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
-    loading: Loading,
-    damper_n_s_per_m: f64,
-    collect_rows: bool,
-) -> Result<ContactLoads, String> {
-    if let FlankContact::Penalty { factor } = model.info.contact {
-        return super::penalty::penalty_contact_loads(
-            model,
-            place,
-            poses,
-            restage,
-            factor,
-            damper_n_s_per_m,
-            collect_rows,
-        );
-    }
-    section_contact_loads(model, place, poses, restage, loading, damper_n_s_per_m, collect_rows, &Flank::BOTH)
-}
-
-/// `contact_loads` with the Hertz sections of the given flanks.
+/// The Hertz sections' contact loads on the given flanks (`contact_law::contact_loads`).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn section_contact_loads(
+pub fn section_contact_loads(
     model: &PmorModel,
     place: &PairPlacement,
     poses: [&GearPose; 2],

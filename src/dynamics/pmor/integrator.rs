@@ -19,20 +19,11 @@
 //! of every `advance` (one right-hand side per call, so the state stays plain data and a torque
 //! set between calls is seen at once) and after every pitch re-anchoring.
 
+pub use super::model::Integrator;
 use super::{PmorDynamics, PmorState};
 use nalgebra::Complex;
-use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Integrator {
-    Rk4,
-    Verlet,
-    /// Energy-conserving: Gonzalez's discrete gradient on the trapezoid, implicit, on the
-    /// quasi-statically condensed pair only (`discrete_gradient_advance`). Unconditionally
-    /// stable; its default step is velocity Verlet's (the accuracy the DTE was measured at).
-    DiscreteGradient,
-}
-
+/// The choice of integrator is the model's data (`model::Integrator`); its numerics are here.
 impl Integrator {
     pub fn name(self) -> &'static str {
         match self {

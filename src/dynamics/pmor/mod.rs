@@ -8,10 +8,12 @@
 //!   and damping forces);
 //! - [`contact`]: the contact search, Hertz law and band on the deformed flanks;
 //! - [`penalty`]: node-to-surface penalty contact instead (the standard PMOR, the reference);
+//! - [`contact_law`]: the one place that picks between the two by the model's contact law;
 //! - [`linear`]: static equilibrium, linearization, natural frequencies, the step limit;
 //! - [`integrator`]: RK4 and velocity Verlet, and the stability limit of each;
 //! - [`quasi_static`]: the contact shapes and the hub direction made quasi-static (the
 //!   default): what is integrated is then the slow part, the mean-axis angle and body modes;
+//!   [`condensation`] holds that split and the Newton solver's state, set up once;
 //! - this file: the state, the pitch anchors, the right-hand side and the RK4 step.
 //!
 //! The pitch anchor kᵢ of each gear is part of the state: the stored shapes cover the reference
@@ -19,7 +21,9 @@
 //! by one and η_Φ is re-expressed through the tooth rotation (η_Φ ← R·η_Φ); the shapes need
 //! nothing, their stored samples already continue periodically.
 
+pub mod condensation;
 pub mod contact;
+pub mod contact_law;
 pub mod equations;
 pub mod integrator;
 pub mod interpolation;
@@ -29,7 +33,8 @@ pub mod penalty;
 pub mod quasi_static;
 
 use crate::contact::mesh_kinematics::PairPlacement;
-use contact::{contact_loads, ContactLoads, GearPose, Loading};
+use contact::{ContactLoads, GearPose, Loading};
+use contact_law::contact_loads;
 use equations::{gear_terms, Damping, GearTerms, Stencil};
 use integrator::Integrator;
 use model::PmorModel;
@@ -83,7 +88,7 @@ pub struct PmorDynamics<'a> {
     /// Rigid inertia added at each bore (hub, shaft share), kg·m².
     pub added_inertia_kgm2: [f64; 2],
     /// The mesh damper (N·s/m): viscous on the loaded sections' approach velocity, shared by
-    /// their Hertz tangent stiffness and never pulling (`contact::contact_loads`). The modal
+    /// their Hertz tangent stiffness and never pulling (`contact_law::contact_loads`). The modal
     /// damping acts on each coordinate at its own frequency, far above the mesh mode's, and
     /// leaves that mode almost undamped (`fmu-build linearize`); this is what damps it.
     /// Zero by default: the paper's model has modal damping only.

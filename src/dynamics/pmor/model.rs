@@ -16,7 +16,6 @@
 
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::Flank;
-use crate::dynamics::pmor::integrator::Integrator;
 use crate::gear::GearPair;
 use crate::rom::flank::FlankGrid;
 use nalgebra::{DMatrix, DVector};
@@ -283,7 +282,7 @@ pub struct PmorModel {
     /// The time integrator the FMU steps with (`integrator`).
     pub integrator: Integrator,
     /// Whether the contact shapes and the hub direction are quasi-static (`quasi_static`).
-    pub condensation: crate::dynamics::pmor::quasi_static::Condensation,
+    pub condensation: Condensation,
     /// The internal step bound the FMU starts with (s): a fraction of the integrator's stability
     /// limit on the pair linearized at a load above its range (`rom::dynamic_reductor`), so the
     /// step follows the stiffest mode of this model instead of a constant.
@@ -295,4 +294,26 @@ pub struct PmorModel {
     /// (`linear::default_step`); 0 while the build has not yet found it.
     pub step_checked_torque_nm: f64,
     pub info: PmorBuildInfo,
+}
+
+/// The time integrator of the FMU (`integrator`: the steppers and their stability limits).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Integrator {
+    Rk4,
+    Verlet,
+    /// Energy-conserving: Gonzalez's discrete gradient on the trapezoid, implicit, on the
+    /// quasi-statically condensed pair only (`discrete_gradient_advance`). Unconditionally
+    /// stable; its default step is velocity Verlet's (the accuracy the DTE was measured at).
+    DiscreteGradient,
+}
+
+/// How the elastic coordinates are integrated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Condensation {
+    /// Every coordinate carries its inertia (the paper's model). The step is bounded by the
+    /// shapes against the contact (≈ 100 kHz) and the hub mode.
+    None,
+    /// The contact shapes and the hub direction quasi-static (`quasi_static`); the step is bounded
+    /// by the retained body modes and the mesh.
+    QuasiStatic,
 }
