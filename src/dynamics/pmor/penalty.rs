@@ -157,7 +157,8 @@ fn teeth_near_mesh(model: &PmorModel, place: &PairPlacement, slave: usize, at: [
 }
 
 /// The contact loads of the pair under node-to-surface penalty contact (the layout of
-/// `contact::contact_loads`, whose mesh damper it shares: a loaded node is a section).
+/// `contact_law::contact_loads`, which chooses it; it shares `contact`'s mesh damper: a loaded
+/// node is a section).
 #[allow(clippy::too_many_arguments)]
 pub fn penalty_contact_loads(
     model: &PmorModel,
