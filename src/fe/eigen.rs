@@ -106,6 +106,20 @@ pub fn lowest_modes_before_sturm_count(
     max_iterations: usize,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<(Modes, f64), String> {
+    // Generic only at the door: the body below is compiled once, here, not again in
+    // every crate (each test, fmu-build) that passes a progress closure of its own.
+    lowest_modes_before_sturm_count_dyn(k, m, chol, count, tolerance, max_iterations, &mut progress)
+}
+
+fn lowest_modes_before_sturm_count_dyn(
+    k: &SparseColMat<usize, f64>,
+    m: &SparseColMat<usize, f64>,
+    chol: &dyn LinearSolve,
+    count: usize,
+    tolerance: f64,
+    max_iterations: usize,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Modes, f64), String> {
     let n = k.nrows();
     if count == 0 || count > n {
         return Err(format!("cannot compute {count} modes of a {n}-DOF model"));

@@ -238,6 +238,21 @@ pub fn global_attachment_modes(
     depth_m: f64,
     progress: impl Fn(usize) + Sync,
 ) -> Result<GlobalAttachmentModes, String> {
+    // Generic only at the door: the body below is compiled once, here, not again in
+    // every crate (each test, fmu-build) that passes a progress closure of its own.
+    global_attachment_modes_dyn(mesh, material, formulation, dofs, total_stiffness, nodes, depth_m, &progress)
+}
+
+fn global_attachment_modes_dyn(
+    mesh: &Mesh,
+    material: &Material,
+    formulation: Formulation,
+    dofs: &DofMap,
+    total_stiffness: &dyn LinearSolve,
+    nodes: &[(usize, [f64; 3])],
+    depth_m: f64,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<GlobalAttachmentModes, String> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
     let n_c = nodes.len();
@@ -290,6 +305,21 @@ pub fn global_attachment_modes_of_teeth(
     flank: &super::flank::FlankGrid,
     depth_m: f64,
     progress: impl Fn(usize) + Sync,
+) -> Result<GlobalAttachmentModes, String> {
+    // Generic only at the door: the body below is compiled once, here, not again in
+    // every crate (each test, fmu-build) that passes a progress closure of its own.
+    global_attachment_modes_of_teeth_dyn(gear, material, formulation, dofs, total_stiffness, flank, depth_m, &progress)
+}
+
+fn global_attachment_modes_of_teeth_dyn(
+    gear: &crate::fe::gear_mesh::GearMesh,
+    material: &Material,
+    formulation: Formulation,
+    dofs: &DofMap,
+    total_stiffness: &dyn LinearSolve,
+    flank: &super::flank::FlankGrid,
+    depth_m: f64,
+    progress: &(dyn Fn(usize) + Sync),
 ) -> Result<GlobalAttachmentModes, String> {
     use rayon::prelude::*;
     let solve_whole = |progress| {

@@ -282,6 +282,17 @@ pub fn build_dynamic_model(
     options: &DynamicBuildOptions,
     progress: impl Fn(String) + Sync,
 ) -> Result<(PmorModel, DynamicBuildReport), String> {
+    // Generic only at the door: the body below is compiled once, here, not again in
+    // every crate (each test, fmu-build) that passes a progress closure of its own.
+    build_dynamic_model_dyn(pair, mesh, options, &progress)
+}
+
+fn build_dynamic_model_dyn(
+    pair: &GearPair,
+    mesh: &MeshSpec,
+    options: &DynamicBuildOptions,
+    progress: &(dyn Fn(String) + Sync),
+) -> Result<(PmorModel, DynamicBuildReport), String> {
     if options.angles < 4 {
         return Err(format!("angles must be ≥ 4 per mesh cycle (got {})", options.angles));
     }

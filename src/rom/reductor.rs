@@ -185,6 +185,19 @@ pub fn pmor_hertz(
     p_en: f64,
     progress: impl Fn(usize) + Sync,
 ) -> Result<(ReducedGear, Reconstructor, CompressionReport), String> {
+    // Generic only at the door: the body below is compiled once, here, not again in
+    // every crate (each test, fmu-build) that passes a progress closure of its own.
+    pmor_hertz_dyn(model, factor, flank, depth_m, p_en, &progress)
+}
+
+fn pmor_hertz_dyn(
+    model: &ClampedGear,
+    factor: &dyn LinearSolve,
+    flank: FlankGrid,
+    depth_m: f64,
+    p_en: f64,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(ReducedGear, Reconstructor, CompressionReport), String> {
     let modes = global_attachment_modes_of_teeth(
         &model.mesh,
         &model.material,

@@ -59,6 +59,18 @@ pub fn drive_law_from_statics(
     rows: usize,
     progress: impl Fn(usize) + Sync,
 ) -> Result<StaticMeshLaw, String> {
+    // Generic only at the door: the body below is compiled once, here, not again in
+    // every crate (each test, fmu-build) that passes a progress closure of its own.
+    drive_law_from_statics_dyn(pair, model, levels, rows, &progress)
+}
+
+fn drive_law_from_statics_dyn(
+    pair: &GearPair,
+    model: &StaticModel,
+    levels: &[f64],
+    rows: usize,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<StaticMeshLaw, String> {
     let (rb1, rb2) = (pair.gear1.base_radius_m, pair.gear2.base_radius_m);
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;
     let roll_offset = pair.pitch_point_m() - pair.path_start_m;

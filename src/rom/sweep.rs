@@ -39,6 +39,17 @@ impl ReducedPair {
         method: Method,
         progress: impl Fn(usize, usize) + Sync,
     ) -> Result<Self, String> {
+        // Generic only at the door: the body below is compiled once, here, not again in
+        // every crate (each test, fmu-build) that passes a progress closure of its own.
+        Self::build_dyn(pair, mesh, method, &progress)
+    }
+
+    fn build_dyn(
+        pair: &GearPair,
+        mesh: &MeshSpec,
+        method: Method,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<Self, String> {
         let place = PairPlacement::new(pair);
         let mut gears = Vec::new();
         let mut reports = Vec::new();

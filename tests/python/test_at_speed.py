@@ -89,8 +89,10 @@ def small_helical_pmor(tmp_path_factory):
     defaults: built here since issue 40 brought its build to about a minute and a half."""
     from conftest import _fmu_build
 
-    path = tmp_path_factory.mktemp("small_helical") / "SmallHelical.fmu"
-    _fmu_build("build", "examples/small_helical.toml", "-o", str(path))
+    folder = tmp_path_factory.mktemp("small_helical")
+    path = folder / "SmallHelical.fmu"
+    # The call test_own_pair makes (the lumped FMU beside it): one build for both (the cache).
+    _fmu_build("build", "examples/small_helical.toml", "-o", str(path), "--lumped-fmu", str(folder / "lumped.fmu"))
     fmu = Fmu(str(path), "small_helical")
     yield fmu
     fmu.close()

@@ -16,13 +16,11 @@ from __future__ import annotations
 
 import math
 import re
-import subprocess
 from pathlib import Path
 
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-TOOL = REPO_ROOT / "target" / "release" / "fmu-build"
 
 UNCOVERED_SIZE = """\
 # A spur pair of a size no example covers: m 1.75 mm, ratio 3.
@@ -66,9 +64,10 @@ def _spec(name: str, tmp: Path) -> Path:
 
 
 def _run(*args: str) -> str:
-    proc = subprocess.run([str(TOOL), *args], cwd=REPO_ROOT, capture_output=True, text=True)
-    assert proc.returncode == 0, f"fmu-build {' '.join(args)} failed:\n{proc.stdout}\n{proc.stderr}"
-    return proc.stdout
+    """`fmu-build args…` through the session's build cache (conftest); fails the test on an error."""
+    from conftest import _fmu_build
+
+    return _fmu_build(*args).stdout
 
 
 @pytest.fixture(scope="module")

@@ -14,22 +14,21 @@ from __future__ import annotations
 
 import math
 import re
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-TOOL = REPO_ROOT / "target" / "release" / "fmu-build"
 SPEC = REPO_ROOT / "examples" / "kurokawa_spur.toml"
 COARSE = ("--across", "4", "--profile", "8", "--rim", "4", "--profile-grading", "uniform")
 
 
 def _run(*args: str) -> str:
-    proc = subprocess.run([str(TOOL), *args], cwd=REPO_ROOT, capture_output=True, text=True)
-    assert proc.returncode == 0, f"fmu-build {' '.join(args)} failed:\n{proc.stdout}\n{proc.stderr}"
-    return proc.stdout
+    """`fmu-build args…` through the session's build cache (conftest); fails the test on an error."""
+    from conftest import _fmu_build
+
+    return _fmu_build(*args).stdout
 
 
 @pytest.fixture(scope="module")
