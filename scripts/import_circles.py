@@ -28,6 +28,7 @@ ITEM = re.compile(
 MACRO = re.compile(r"macro_rules!\s+(\w+)")
 USE = re.compile(r"\b(pub(?:\([^)]*\))?\s+)?use\s+([^;]+);", re.S)
 PATH = re.compile(r"(?<![\w:])((?:crate|super|self)(?:::\w+)+)")
+CHILD_PATH = re.compile(r"(?<![\w:])((\w+)(?:::\w+)+)")
 
 
 def strip_comments(text: str) -> str:
@@ -147,6 +148,9 @@ class Crate:
             inline = inline_modules(text)
             paths = [(u.start(), p) for u in USE.finditer(text) for p in expand_use_tree(u.group(2))]
             paths += [(q.start(), q.group(1)) for q in PATH.finditer(text) if not within_use(text, q.start())]
+            # A path from a child module (`dynamics::any_model::AnyModel` in lib.rs).
+            paths += [(q.start(), q.group(1)) for q in CHILD_PATH.finditer(text)
+                      if m + (q.group(2),) in self.modules and not within_use(text, q.start())]
             for at, p in paths:
                 # Inside an inline `mod tests { … }` the first `super` is the file's own module.
                 depth = sum(start <= at < end for start, end in inline)

@@ -144,7 +144,7 @@ pub fn element_fmu(name: &str, element: Element, so: &[u8]) -> Result<Vec<u8>> {
     )
     .map_err(anyhow::Error::msg)?;
     let file = ModelFile { guid, pair_name: name.to_string(), model: kind };
-    crate::fmu_archive(&xml, &file, so)
+    crate::fmu_archive::fmu_archive(&xml, &file, so)
 }
 
 /// The demo drivetrain's elements (examples/drivetrain.py's defaults).
@@ -169,13 +169,13 @@ pub struct DrivetrainOptions {
     #[arg(long, default_value_t = 2.0)]
     pub load_viscous_nms_per_rad: f64,
     /// The bodies' internal RK4 step (s).
-    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S, allow_negative_numbers = true, value_parser = crate::positive_number)]
+    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S, allow_negative_numbers = true, value_parser = crate::cli_values::positive_number)]
     pub max_step_s: f64,
     /// The communication step the file declares (s).
-    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S, allow_negative_numbers = true, value_parser = crate::positive_number)]
+    #[arg(long, default_value_t = SSP_COMMUNICATION_STEP_S, allow_negative_numbers = true, value_parser = crate::cli_values::positive_number)]
     pub communication_step_s: f64,
     /// The stop time the file declares (s).
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true, value_parser = crate::positive_number)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true, value_parser = crate::cli_values::positive_number)]
     pub stop_time_s: f64,
 }
 
@@ -379,4 +379,32 @@ mod tests {
             }
         }
     }
+}
+
+/// `fmu-build element`: one drivetrain element FMU.
+pub(crate) fn element_command(
+    kind: ElementKind,
+    output: &Path,
+    name: Option<String>,
+    options: &ElementOptions,
+    library: Option<PathBuf>,
+) -> Result<()> {
+    crate::fmu_archive::check_output_folder(output)?;
+    let element = options.element(kind)?;
+    let name = name.unwrap_or_else(|| element.kind().to_string());
+    let bytes = element_fmu(&name, element, &crate::fmu_archive::library_bytes(library)?)?;
+    std::fs::write(output, bytes).with_context(|| format!("cannot create {}", output.display()))?;
+    println!("wrote {}", output.display());
+    Ok(())
+}
+
+/// `fmu-build ssp`: the drivetrain around a gear FMU as an SSP archive.
+pub(crate) fn ssp_command(
+    gear_fmu: &Path,
+    output: &Path,
+    options: &DrivetrainOptions,
+    library: Option<PathBuf>,
+) -> Result<()> {
+    crate::fmu_archive::check_output_folder(output)?;
+    write_ssp(output, gear_fmu, options, &crate::fmu_archive::library_bytes(library)?)
 }

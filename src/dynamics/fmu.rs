@@ -173,7 +173,7 @@ pub struct Validity {
     /// strength (`gear::rating::yield_mesh_force_n`): the linear-elastic teeth end there.
     pub yield_mesh_force_n: f64,
     /// [1] The mesh force of the largest load the model was built and its step checked for
-    /// (PMOR-Hertz: `linear::linearization_torque_nm` / r_b1; the lumped law has no such bound:
+    /// (PMOR-Hertz: `PmorModel::linearization_torque_nm` / r_b1; the lumped law has no such bound:
     /// infinite).
     pub range_mesh_force_n: f64,
     /// That load as a torque on gear 1 (N·m), for the message.
@@ -328,7 +328,7 @@ impl LoadedPair {
                 range_torque_nm: f64::INFINITY,
             },
             Physics::PmorHertz { model, .. } => {
-                let range_torque_nm = crate::dynamics::pmor::linear::linearization_torque_nm(model);
+                let range_torque_nm = model.linearization_torque_nm();
                 // Forged model data may make these NaN: a NaN bound never warns, and nothing panics.
                 Validity {
                     yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(&model.pair),

@@ -17,12 +17,6 @@ use super::{PmorDynamics, PmorState};
 use crate::contact::mesh_kinematics::Flank;
 use nalgebra::{Complex, DMatrix, DVector};
 
-/// The load of the step-limit linearization as a multiple of the largest ROM torque
-/// (`stability_limit_under_load`): the stiffest mode is the Hertz contact's, which stiffens (slowly,
-/// logarithmically) with load; at 4× the limit is 11 % shorter than at the ROM load on the
-/// default spur pair.
-pub const STEP_LOAD_FACTOR: f64 = 4.0;
-
 /// Fraction of the stability limit taken as the default step: room for the transient loads of
 /// impacts and re-engagement and for a user's larger damping ratios. On example 3 the DTE at
 /// 1 µs and at 6 µs agree within 0.2 % (BENCHMARKS), so the step is set by stability, not accuracy.
@@ -43,34 +37,11 @@ pub struct IntegratorStep {
     pub max_step_s: f64,
 }
 
-/// The load (N·m on gear 1) the step limit is proven at, and the top of the model's load range:
-/// the one the build found (`PmorModel::step_checked_torque_nm`), else the first it tries,
-/// [`step_load_ceiling_nm`].
-pub fn linearization_torque_nm(model: &crate::dynamics::pmor::model::PmorModel) -> f64 {
-    if model.step_checked_torque_nm > 0.0 {
-        model.step_checked_torque_nm
-    } else {
-        step_load_ceiling_nm(model)
-    }
-}
-
-/// `STEP_LOAD_FACTOR` × the largest ROM torque, but no more than the pair's yield torque
-/// (`gear::rating`): beyond it the teeth yield and no linear-elastic model holds.
-pub fn step_load_ceiling_nm(model: &crate::dynamics::pmor::model::PmorModel) -> f64 {
-    step_load_ceiling_of(&model.pair, &model.info.rom_torques_nm)
-}
-
-/// [`step_load_ceiling_nm`] of a pair built at `rom_torques_nm` (before its model exists).
-pub fn step_load_ceiling_of(pair: &crate::gear::GearPair, rom_torques_nm: &[f64]) -> f64 {
-    let rom = rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    (STEP_LOAD_FACTOR * rom).min(crate::gear::rating::yield_torque_nm(pair).max(rom))
-}
-
 /// Each retry of the build's linearization lowers the load by this factor.
 const STEP_LOAD_BACKOFF: f64 = 0.8;
 
 /// The default step of `dynamics` (its integrator, inertias and damping): the stability limit on
-/// the pair linearized under [`linearization_torque_nm`] (`stability_limit_under_load`), and
+/// the pair linearized under [`PmorModel::linearization_torque_nm`](super::model::PmorModel::linearization_torque_nm) (`stability_limit_under_load`), and
 /// `STEP_SAFETY` of it. In the build (no load found yet) a load at which the contact law leaves
 /// its range (the Hertz band wider than h/4 on a pair whose teeth are short against their
 /// load, e.g. a small helical pair near its yield torque) is lowered by `STEP_LOAD_BACKOFF`
@@ -99,7 +70,7 @@ pub fn default_step(dynamics: &PmorDynamics) -> Result<IntegratorStep, String> {
         dynamics
     };
     let rom = model.info.rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    let mut torque_nm = linearization_torque_nm(model);
+    let mut torque_nm = model.linearization_torque_nm();
     let retry = model.step_checked_torque_nm <= 0.0;
     let (stability_limit_s, natural_frequencies_hz) = loop {
         match stability_limit_under_load(dynamics, torque_nm) {

@@ -305,7 +305,7 @@ impl<'a> PmorDynamics<'a> {
                 crate::gear::sig(g.pitch_rad()),
                 crate::gear::sig(g.sample_step_rad()),
                 crate::gear::sig(theta),
-                crate::gear::sig(linear::linearization_torque_nm(self.model))
+                crate::gear::sig(self.model.linearization_torque_nm())
             )
         })
     }

@@ -317,3 +317,34 @@ pub enum Condensation {
     /// by the retained body modes and the mesh.
     QuasiStatic,
 }
+
+/// The load of the step-limit linearization as a multiple of the largest ROM torque
+/// (`stability_limit_under_load`): the stiffest mode is the Hertz contact's, which stiffens (slowly,
+/// logarithmically) with load; at 4× the limit is 11 % shorter than at the ROM load on the
+/// default spur pair.
+pub const STEP_LOAD_FACTOR: f64 = 4.0;
+
+impl PmorModel {
+    /// The load (N·m on gear 1) the step limit is proven at, and the top of the model's load
+    /// range: the one the build found (`step_checked_torque_nm`), else the first it tries,
+    /// [`step_load_ceiling_nm`].
+    pub fn linearization_torque_nm(&self) -> f64 {
+        if self.step_checked_torque_nm > 0.0 {
+            self.step_checked_torque_nm
+        } else {
+            step_load_ceiling_nm(self)
+        }
+    }
+}
+
+/// `STEP_LOAD_FACTOR` × the largest ROM torque, but no more than the pair's yield torque
+/// (`gear::rating`): beyond it the teeth yield and no linear-elastic model holds.
+pub fn step_load_ceiling_nm(model: &PmorModel) -> f64 {
+    step_load_ceiling_of(&model.pair, &model.info.rom_torques_nm)
+}
+
+/// [`step_load_ceiling_nm`] of a pair built at `rom_torques_nm` (before its model exists).
+pub fn step_load_ceiling_of(pair: &crate::gear::GearPair, rom_torques_nm: &[f64]) -> f64 {
+    let rom = rom_torques_nm.iter().cloned().fold(0.0, f64::max);
+    (STEP_LOAD_FACTOR * rom).min(crate::gear::rating::yield_torque_nm(pair).max(rom))
+}
