@@ -229,8 +229,8 @@ fn main() {
 
     // The Hertz law's equivalent penalty factor at 185 N·m, over a mesh cycle.
     let d = &dynamics[0];
-    let c_gamma = gearfmu::dynamics::iso6336::to_newton_per_metre(
-        gearfmu::dynamics::iso6336::mesh_stiffness_c_gamma_alpha(&pair),
+    let c_gamma = gearfmu::closed_forms::iso6336::to_newton_per_metre(
+        gearfmu::closed_forms::iso6336::mesh_stiffness_c_gamma_alpha(&pair),
         1.0,
     );
     let pitch2 = 2.0 * std::f64::consts::PI / pair.gear2.teeth as f64;

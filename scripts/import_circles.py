@@ -1,6 +1,7 @@
 """Import circles between the source files of each crate (issue 41): fails on any.
 
     python3 scripts/import_circles.py [--crate src] [--crate fmu-build/src] [--graph]
+    python3 scripts/import_circles.py --reachable-from src/fmi2/exports.rs   (the seam test's list)
 
 A file depends on another when it names an item defined there: through `use` (trees expanded),
 or a path in the code (`crate::…`, `super::…`, `self::…`). A name a module re-exports (`pub use`)
@@ -148,7 +149,7 @@ class Crate:
             inline = inline_modules(text)
             paths = [(u.start(), p) for u in USE.finditer(text) for p in expand_use_tree(u.group(2))]
             paths += [(q.start(), q.group(1)) for q in PATH.finditer(text) if not within_use(text, q.start())]
-            # A path from a child module (`dynamics::any_model::AnyModel` in lib.rs).
+            # A path from a child module (`fmu::any_model::AnyModel` in lib.rs).
             paths += [(q.start(), q.group(1)) for q in CHILD_PATH.finditer(text)
                       if m + (q.group(2),) in self.modules and not within_use(text, q.start())]
             for at, p in paths:
@@ -160,6 +161,33 @@ class Crate:
                 if target is not None and target != m and target in self.modules:
                     edges[m].add(target)
         return edges
+
+
+IMPL = re.compile(r"^\s*impl(?:<[^{]*?>)?\s+(?:[\w:]+(?:<[^{]*?>)?\s+for\s+)?(?:[\w]+::)*(\w+)", re.M)
+
+
+def impl_edges(crate: Crate, edges) -> dict:
+    """For reachability: a type's file → each file of the same module with an `impl` block for
+    it. A method is called on a value, by no path the graph sees; whoever reaches the type
+    reaches the methods its module gives it (`PmorDynamics`'s step is in pmor/integrator.rs,
+    its type in pmor/mod.rs). An impl in another module is that module's extension (the offline
+    constructors `rom::flank` adds to `FlankGrid`, `closed_forms::mesh_stiffness` to
+    `LumpedMesh`), reached only by a path to it. Not for the circle check: an impl block that
+    uses its type is no circle."""
+    definers: dict[str, list] = {}
+    for m, names in crate.items.items():
+        for name in names:
+            definers.setdefault(name, []).append(m)
+    extra = {m: set() for m in crate.modules}
+    for m, text in crate.text.items():
+        for found in IMPL.finditer(text):
+            owners = definers.get(found.group(1), [])
+            owners = [o for o in owners if o in edges[m]] or owners if len(owners) > 1 else owners
+            for owner in owners:
+                same_module = (owner[:-1] if crate.modules[owner].stem != "mod" else owner) == m[:-1]
+                if owner != m and same_module:
+                    extra[owner].add(m)
+    return extra
 
 
 def inline_modules(text: str) -> list[tuple[int, int]]:
@@ -235,11 +263,34 @@ def one_cycle(edges, component):
     return component
 
 
+def reachable(edges, starts) -> list:
+    """The files `starts` depend on, directly or not, and `starts` themselves, sorted."""
+    seen, frontier = set(starts), list(starts)
+    while frontier:
+        for w in edges[frontier.pop()]:
+            if w not in seen:
+                seen.add(w)
+                frontier.append(w)
+    return sorted(seen)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--crate", action="append", type=Path, help="a crate's source root (default: src, fmu-build/src)")
     parser.add_argument("--graph", action="store_true", help="print every file's dependencies")
+    parser.add_argument("--reachable-from", nargs="+", type=Path, metavar="FILE",
+                        help="print, one a line, the files these files reach through their dependencies "
+                             "(themselves included), and check nothing else")
     args = parser.parse_args()
+    if args.reachable_from:
+        crate = Crate(REPO_ROOT / "src")
+        by_path = {p.resolve(): m for m, p in crate.modules.items()}
+        edges = crate.graph()
+        for m, extensions in impl_edges(crate, edges).items():
+            edges[m] |= extensions
+        for f in reachable(edges, [by_path[(REPO_ROOT / f).resolve()] for f in args.reachable_from]):
+            print(crate.modules[f].relative_to(REPO_ROOT))
+        return 0
     roots = args.crate or [REPO_ROOT / "src", REPO_ROOT / "fmu-build" / "src"]
     circles = 0
     for root in roots:

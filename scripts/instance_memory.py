@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Resident memory that each instance of an FMU adds in one process (fmpy), after instantiation and
-initialization: instances of one FMU share its model data (src/dynamics/shared_model.rs), so the
+initialization: instances of one FMU share its model data (src/fmu/shared_model.rs), so the
 first instance carries the model and every further one only its state.
 
     .venv/bin/python scripts/instance_memory.py out/KurokawaSpur.fmu [--instances 4]

@@ -2,7 +2,7 @@
 
 Usage: .venv/bin/python scripts/substep_cost.py out/KurokawaSpur.fmu out/KurokawaSpurPmor.fmu
 Each FMU: 185 N·m on gear 1 against its static load on gear 2, five calls of h = 10⁴·max_step.
-The bounds MAX_SUBSTEPS_* in src/dynamics/fmu.rs are ~10 s of work at these rates.
+The bounds MAX_SUBSTEPS_* in src/fmu/gear_pair.rs are ~10 s of work at these rates.
 """
 
 import sys

@@ -3,7 +3,7 @@
 //! body, then the body in postcard. A wrong magic, version or checksum is refused with a message
 //! that says which, so a stale or damaged FMU fails at instantiate, never later.
 
-use crate::dynamics::element_parameters::Element;
+use crate::drivetrain::element_parameters::Element;
 use crate::dynamics::lumped::LumpedMesh;
 use crate::dynamics::pmor::model::PmorModel;
 use serde::{Deserialize, Serialize};
@@ -24,7 +24,7 @@ pub enum ModelKind {
     Lumped(LumpedMesh),
     /// The FE-based reduced pair in floating frames (`dynamics::pmor`).
     PmorHertz(Box<PmorModel>),
-    /// A drivetrain element: inertia, shaft, motor or load (`dynamics::elements`).
+    /// A drivetrain element: inertia, shaft, motor or load (`drivetrain::elements`).
     Element(Element),
 }
 

@@ -1,11 +1,11 @@
 //! Single-tooth stiffness by finite elements on the Kurokawa spur pinion and wheel: the global
 //! part of the pitch-point compliance converges under refinement (the line-load total does not),
 //! and the rise of compliance toward the tip agrees with the potential-energy method's
-//! (beam theory + Sainsot's foundation, `dynamics::mesh_stiffness`), an independent model.
+//! (beam theory + Sainsot's foundation, `closed_forms::mesh_stiffness`), an independent model.
 
 mod common;
 
-use gearfmu::dynamics::mesh_stiffness::tooth_compliance_per_width;
+use gearfmu::closed_forms::mesh_stiffness::tooth_compliance_per_width;
 use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::gear_mesh::{mesh_gear, MeshSpec};
 use gearfmu::fe::hex8::Formulation;

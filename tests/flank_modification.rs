@@ -158,7 +158,7 @@ fn misalignment_raises_the_face_load_factor_and_lead_crowning_lowers_it() {
         mean.iter().fold(0.0f64, |m, &w| m.max(w)) / average
     };
     let specific_load = torque / plain.gear1.pitch_radius_m / (plain.face_width_m * 1e3);
-    let iso = |f_um: f64| gearfmu::dynamics::iso6336::face_load_factor_k_h_beta(&plain, f_um, specific_load);
+    let iso = |f_um: f64| gearfmu::closed_forms::iso6336::face_load_factor_k_h_beta(&plain, f_um, specific_load);
     let even = face_load(&plain);
     let scale = even.iter().fold(0.0f64, |m, &w| m.max(w));
     for (a, b) in even.iter().zip(even.iter().rev()) {

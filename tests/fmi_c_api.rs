@@ -368,7 +368,7 @@ fn two_instances_share_no_state() {
     }
 }
 
-/// Instances of one FMU share its model data (`dynamics::shared_model`), but only for identical
+/// Instances of one FMU share its model data (`fmu::shared_model`), but only for identical
 /// bytes: a model file damaged in place while an instance of it is alive (same size, same
 /// directory, within the file system's timestamp granularity) is still read, checked and refused.
 #[test]
@@ -386,7 +386,7 @@ fn instances_share_model_data_only_for_identical_bytes() {
     // White-box: the component is the instance; its model is one allocation for both.
     let physics = |c: fmi2Component| {
         let i = unsafe { &*(c as *const Instance<FmuModel>) };
-        let gearfmu::dynamics::any_model::AnyModel::GearPair(pair) = &i.model else { panic!("a gear pair FMU") };
+        let gearfmu::fmu::any_model::AnyModel::GearPair(pair) = &i.model else { panic!("a gear pair FMU") };
         &pair.physics as *const _
     };
     assert_eq!(physics(a), physics(b), "two instances of one model file decode it once");
@@ -555,7 +555,7 @@ fn status_queries_without_an_answer_are_discarded_logged_and_survivable() {
 /// instance back. max_step that is not a positive normal number is refused at fmi2SetReal.
 #[test]
 fn steps_needing_unbounded_work_are_refused_at_once() {
-    use gearfmu::dynamics::fmu::MAX_SUBSTEPS_LUMPED;
+    use gearfmu::fmu::gear_pair::MAX_SUBSTEPS_LUMPED;
     let name = "bounded";
     let reference = initialized("bounded-reference", None);
     let expected = run(reference, 0.0, 10, 1e-4);
@@ -748,9 +748,9 @@ fn a_state_from_another_fmu_is_refused() {
 /// instance keeps its previous state and recovers with a good one.
 #[test]
 fn restored_parameters_are_revalidated() {
-    use gearfmu::dynamics::any_model::AnyState;
-    use gearfmu::dynamics::fmu::GearPairState;
     use gearfmu::fmi2::instance::{deserialize_snapshot, serialize_snapshot, Snapshot};
+    use gearfmu::fmu::any_model::AnyState;
+    use gearfmu::fmu::gear_pair::GearPairState;
     let (_, guid) = resources();
     let name = "revalidate";
     let c = initialized(name, None);
@@ -830,8 +830,8 @@ fn a_max_step_beyond_the_stiffest_mode_is_refused_at_exit_initialization() {
 /// fmi2DoStep an error naming the balance's terms; the saved state brings the instance back.
 #[test]
 fn a_broken_energy_balance_is_an_error_on_the_step_where_it_appears() {
-    use gearfmu::dynamics::any_model::AnyState;
     use gearfmu::fmi2::instance::Snapshot;
+    use gearfmu::fmu::any_model::AnyState;
     let name = "energy";
     let c = initialized(name, None);
     run(c, 0.0, 5, 1e-4);
@@ -882,9 +882,9 @@ fn soak_torques(phase: usize, local_s: f64, w2: f64) -> (f64, f64) {
 ///   drive phases start from different states and settle for 0.2 s only).
 #[test]
 fn soak_a_million_steps_through_drive_brake_free_flight_and_rattle() {
-    use gearfmu::dynamics::any_model::AnyState;
     use gearfmu::dynamics::lumped::{LumpedModel, LumpedState};
     use gearfmu::fmi2::instance::Snapshot;
+    use gearfmu::fmu::any_model::AnyState;
     let (dir, _) = resources();
     let ModelKind::Lumped(mesh) = ModelFile::from_bytes(&std::fs::read(dir.join(FILE_NAME)).unwrap()).unwrap().model
     else {
@@ -1023,10 +1023,10 @@ fn pmor_resources() -> &'static (PathBuf, String) {
 #[test]
 fn pmor_hertz_soak_through_drive_brake_free_flight_and_rattle() {
     use gearfmu::contact::mesh_kinematics::PairPlacement;
-    use gearfmu::dynamics::any_model::AnyState;
-    use gearfmu::dynamics::fmu::GearPairState;
     use gearfmu::dynamics::pmor::PmorDynamics;
     use gearfmu::fmi2::instance::Snapshot;
+    use gearfmu::fmu::any_model::AnyState;
+    use gearfmu::fmu::gear_pair::GearPairState;
     let (dir, guid) = pmor_resources();
     let ModelKind::PmorHertz(model) =
         ModelFile::from_bytes(&std::fs::read(dir.join(FILE_NAME)).unwrap()).unwrap().model
@@ -1313,11 +1313,11 @@ fn outputs_do_not_follow_the_torques_until_a_step() {
 }
 
 /// A drivetrain element's resources folder (issue 29): its model file, GUID from elements.toml.
-fn element_resources(name: &str, element: gearfmu::dynamics::elements::Element) -> (PathBuf, String) {
+fn element_resources(name: &str, element: gearfmu::drivetrain::elements::Element) -> (PathBuf, String) {
     log::set_logger(&Capture).ok();
     log::set_max_level(log::LevelFilter::Trace);
     let model = ModelKind::Element(element);
-    let guid = ModelFile::compute_guid(gearfmu::dynamics::elements::ELEMENTS_TOML, name, &model);
+    let guid = ModelFile::compute_guid(gearfmu::drivetrain::elements::ELEMENTS_TOML, name, &model);
     let dir = std::env::temp_dir().join(format!("gearfmu-c-api-{}", std::process::id())).join(name).join("resources");
     std::fs::create_dir_all(&dir).unwrap();
     let file = ModelFile { guid: guid.clone(), pair_name: name.into(), model };
@@ -1327,7 +1327,7 @@ fn element_resources(name: &str, element: gearfmu::dynamics::elements::Element) 
 
 /// An element's value reference by name (elements.toml).
 fn element_vr(kind: &str, name: &str) -> u32 {
-    gearfmu::dynamics::elements::variables_of(kind).iter().find(|v| v.name == name).unwrap().value_reference
+    gearfmu::drivetrain::elements::variables_of(kind).iter().find(|v| v.name == name).unwrap().value_reference
 }
 
 /// The element FMUs through the same C API and state machine as the gear pair (issue 29): the
@@ -1338,7 +1338,7 @@ fn element_vr(kind: &str, name: &str) -> u32 {
 /// stiffness, a step before initialization, a gear pair's model file in an element's place.
 #[test]
 fn element_fmus_follow_the_state_machine_and_refuse_bad_calls() {
-    use gearfmu::dynamics::elements::Element;
+    use gearfmu::drivetrain::elements::Element;
     let (dir, guid) =
         element_resources("shaft", Element::Shaft { stiffness_nm_per_rad: 2e4, damping_nms_per_rad: 3.0 });
     let fresh = |name: &str| {
@@ -1428,7 +1428,7 @@ fn element_fmus_follow_the_state_machine_and_refuse_bad_calls() {
 /// picks the loader at instantiation), agrees with the full decode for an element and a pair.
 #[test]
 fn the_kind_peek_agrees_with_the_decoded_kind() {
-    use gearfmu::dynamics::elements::Element;
+    use gearfmu::drivetrain::elements::Element;
     let element = Element::Shaft { stiffness_nm_per_rad: 1e4, damping_nms_per_rad: 1.0 };
     let file = ModelFile { guid: "{g}".into(), pair_name: "shaft".into(), model: ModelKind::Element(element) };
     let bytes = file.to_bytes();

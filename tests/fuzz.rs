@@ -11,13 +11,13 @@
 //! seed, until the budget is spent, and prints cases and cases per second per target.
 
 use fmi_sys::fmi2::*;
-use gearfmu::dynamics::fmu::{GearPairFmu, GearPairState, LUMPED_DEFAULT_MAX_STEP_S};
 use gearfmu::dynamics::lumped::LumpedMesh;
 use gearfmu::dynamics::pmor::PmorState;
 use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fmi2::exports::*;
 use gearfmu::fmi2::instance::{deserialize_snapshot, serialize_snapshot, time_tolerance, Instance, Snapshot};
 use gearfmu::fmi2::Phase;
+use gearfmu::fmu::gear_pair::{GearPairFmu, GearPairState, LUMPED_DEFAULT_MAX_STEP_S};
 use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::interface::{value_reference, variables};
 use gearfmu::model_file::{ModelFile, ModelKind, FILE_NAME};
@@ -140,7 +140,7 @@ struct Resources {
     /// contact for them, and a state outside the Hertz law's range is an error, not a number.
     contact_outputs_can_fail: bool,
     /// An instance held for the whole run, as a master holding one instance while it creates
-    /// others: the targets' instances then share its model data (`dynamics::shared_model`)
+    /// others: the targets' instances then share its model data (`fmu::shared_model`)
     /// instead of decoding the file each case. The decoder has its own target.
     _anchor: usize,
 }
@@ -1585,15 +1585,15 @@ fn regression_malformed_lumped_model_data_is_refused_at_instantiate() {
 /// A gear pair FMU's snapshot as its own state, and back (the binary's FMU state holds
 /// `AnyState`, the state of whichever model the FMU carries).
 fn gear_snapshot(
-    s: gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::any_model::AnyState>,
-) -> Option<gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::fmu::GearPairState>> {
+    s: gearfmu::fmi2::instance::Snapshot<gearfmu::fmu::any_model::AnyState>,
+) -> Option<gearfmu::fmi2::instance::Snapshot<gearfmu::fmu::gear_pair::GearPairState>> {
     let gearfmu::fmi2::instance::Snapshot { state, time, stop_time, phase } = s;
     Some(gearfmu::fmi2::instance::Snapshot { state: state.into_gear_pair()?, time, stop_time, phase })
 }
 
 fn any_snapshot(
-    s: gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::fmu::GearPairState>,
-) -> gearfmu::fmi2::instance::Snapshot<gearfmu::dynamics::any_model::AnyState> {
+    s: gearfmu::fmi2::instance::Snapshot<gearfmu::fmu::gear_pair::GearPairState>,
+) -> gearfmu::fmi2::instance::Snapshot<gearfmu::fmu::any_model::AnyState> {
     let gearfmu::fmi2::instance::Snapshot { state, time, stop_time, phase } = s;
     gearfmu::fmi2::instance::Snapshot { state: state.into(), time, stop_time, phase }
 }

@@ -3,7 +3,7 @@
 //! m_n 8 mm, α_n 20°, β 15.8°, z 17/103, x 0.145/0, basic rack profile D with h_fP = 1.4 m_n,
 //! steel/steel): c′_th = 17.856, c′ = 12.370 and c_γα = 17.465 N/(mm·µm).
 
-use gearfmu::dynamics::iso6336;
+use gearfmu::closed_forms::iso6336;
 use gearfmu::gear::{GearPair, PairSpec};
 
 const TR_6336_30_EXAMPLE_1: &str = r#"

@@ -11,8 +11,8 @@
 //! the mean moves by more than 25 %, the other two by less than 5 %. The closed-form torsion of
 //! an annulus from bore to root circle is printed beside the mean's shift, not asserted.
 
+use gearfmu::closed_forms::iso6336::ZoneComparison;
 use gearfmu::contact::hertz::ApproachLaw;
-use gearfmu::dynamics::iso6336::ZoneComparison;
 use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::rom::sweep::{Method, ReducedPair};
 use std::f64::consts::PI;

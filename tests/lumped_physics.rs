@@ -2,7 +2,7 @@
 //! mesh stiffness, the mesh natural frequency √(k̄/m_e), conservation of energy, and the
 //! kinematics of backlash (contact loss, back-flank contact).
 
-use gearfmu::dynamics::iso6336;
+use gearfmu::closed_forms::iso6336;
 use gearfmu::dynamics::lumped::{mesh_natural_frequency_hz, LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
 use gearfmu::gear::{GearPair, HertzContact, PairSpec};
 use rustfft::{num_complex::Complex, FftPlanner};

@@ -24,8 +24,8 @@
 
 mod common;
 
+use gearfmu::closed_forms::iso6336;
 use gearfmu::contact::hertz::ApproachLaw;
-use gearfmu::dynamics::iso6336;
 use gearfmu::dynamics::lumped::LumpedMesh;
 use gearfmu::gear::{GearPair, PairSpec};
 use gearfmu::rom::reductor::ReducedGear;

@@ -104,7 +104,7 @@ fn hertz_contact_on_a_basis_that_keeps_the_local_deformation_is_refused() {
 /// agreement asked is 20 %.
 #[test]
 fn root_stress_at_the_tip_matches_lewis_form_factor() {
-    use gearfmu::gear::root_stress::nominal_root_stress;
+    use gearfmu::closed_forms::root_stress::nominal_root_stress;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/kurokawa_spur.toml");
     let p = GearPair::from_spec(&PairSpec::load(&path).unwrap()).unwrap();
     let (b, m, w_t) = (p.face_width_m, 6e-3, 1000.0);

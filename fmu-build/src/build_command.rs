@@ -197,7 +197,7 @@ pub(crate) fn build_rom(
     use gearfmu::dynamics::pmor::quasi_static::Condensation;
     use gearfmu::rom::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions};
     let rom_torques_nm = rom.rom_torques_nm.clone().unwrap_or_else(|| vec![pair.operating_torque_nm]);
-    let yield_torque = gearfmu::gear::rating::yield_torque_nm(pair);
+    let yield_torque = gearfmu::closed_forms::rating::yield_torque_nm(pair);
     if let Some(t) = rom_torques_nm.iter().find(|t| **t > yield_torque) {
         anyhow::bail!(
             "--rom-torques-nm {}: beyond the pair's yield torque {} N·m (one pair at the tip bends its root past \

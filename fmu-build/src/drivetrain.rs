@@ -10,7 +10,7 @@
 use crate::model_description::{self, ModelFacts};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use gearfmu::dynamics::elements::{Element, SpeedTorqueCurve};
+use gearfmu::drivetrain::elements::{Element, SpeedTorqueCurve};
 use gearfmu::model_file::{ModelFile, ModelKind};
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -120,7 +120,7 @@ fn read_curve(path: &Path) -> Result<SpeedTorqueCurve> {
 /// One element FMU, as the bytes of its archive.
 pub fn element_fmu(name: &str, element: Element, so: &[u8]) -> Result<Vec<u8>> {
     let kind = ModelKind::Element(element.clone());
-    let guid = ModelFile::compute_guid(gearfmu::dynamics::elements::ELEMENTS_TOML, name, &kind);
+    let guid = ModelFile::compute_guid(gearfmu::drivetrain::elements::ELEMENTS_TOML, name, &kind);
     let starts = element.parameter_starts();
     let description = match &element {
         Element::Inertia { .. } => "Rigid inertia with a torque at each flange (MSL Rotational signs)".to_string(),

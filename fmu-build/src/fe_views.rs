@@ -1,7 +1,7 @@
 //! The FE model's views: `mesh` (VTK, PNG), `modes` (eigenmodes) and `tooth-stiffness`.
 
 use anyhow::Result;
-use gearfmu::dynamics::iso6336;
+use gearfmu::closed_forms::iso6336;
 use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::gear_mesh::{mesh_gear, GearMesh};
 use gearfmu::fe::hex8::Formulation;
@@ -148,7 +148,7 @@ pub(crate) fn tooth_stiffness_command(spec: &Path, resolution: Resolution) -> Re
         )
         .map_err(anyhow::Error::msg)?;
         bar.finish_and_clear();
-        let pem = gearfmu::dynamics::mesh_stiffness::tooth_compliance_per_width(
+        let pem = gearfmu::closed_forms::mesh_stiffness::tooth_compliance_per_width(
             gear,
             &pair,
             gear.pitch_radius_m,

@@ -49,7 +49,7 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
                 ("inertia_1", mesh.inertia_1_kgm2),
                 ("inertia_2", mesh.inertia_2_kgm2),
                 ("mesh_damping_ratio", mesh.mesh_damping_ratio),
-                ("max_step", gearfmu::dynamics::fmu::LUMPED_DEFAULT_MAX_STEP_S),
+                ("max_step", gearfmu::fmu::gear_pair::LUMPED_DEFAULT_MAX_STEP_S),
             ],
             format!(
                 "Gear pair {} (z {}/{}), lumped model: rigid gears, {}, backlash",
@@ -97,7 +97,7 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
             guid: &guid,
             description: &description,
             model_starts: &starts,
-            operating_point_nm: Some((pair.operating_torque_nm, gearfmu::gear::rating::yield_torque_nm(&pair))),
+            operating_point_nm: Some((pair.operating_torque_nm, gearfmu::closed_forms::rating::yield_torque_nm(&pair))),
             default_step_s: 1e-5,
         },
     )

@@ -2,7 +2,7 @@
 //! and optionally dumped as JSON.
 
 use anyhow::Result;
-use gearfmu::dynamics::iso6336;
+use gearfmu::closed_forms::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedParameters};
 use gearfmu::gear::sig;
 use std::path::{Path, PathBuf};
@@ -28,8 +28,8 @@ pub(crate) fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, re
     println!(
         "  torque on gear 1  operating {} N·m; rated {} N·m (nominal root stress at a third of the yield strength), yield {} N·m",
         sig(pair.operating_torque_nm),
-        sig(gearfmu::gear::rating::rated_torque_nm(&pair)),
-        sig(gearfmu::gear::rating::yield_torque_nm(&pair))
+        sig(gearfmu::closed_forms::rating::rated_torque_nm(&pair)),
+        sig(gearfmu::closed_forms::rating::yield_torque_nm(&pair))
     );
     println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
     // The geometry is printed; the mesh law takes its FE statics now (with `--mesh-law fe`).

@@ -29,8 +29,8 @@ pub(crate) fn linearize_command(
     // The instance's dynamics, as the FMU builds it (mesh damper included).
     let file =
         ModelFile { guid: String::new(), pair_name: model.pair.name.clone(), model: ModelKind::PmorHertz(model) };
-    let fmu_model = gearfmu::dynamics::fmu::GearPairFmu::from_model_file(file).map_err(anyhow::Error::msg)?;
-    let gearfmu::dynamics::fmu::Physics::PmorHertz { model, place } = &fmu_model.physics else { unreachable!() };
+    let fmu_model = gearfmu::fmu::gear_pair::GearPairFmu::from_model_file(file).map_err(anyhow::Error::msg)?;
+    let gearfmu::fmu::gear_pair::Physics::PmorHertz { model, place } = &fmu_model.physics else { unreachable!() };
     let mut state = gearfmu::fmi2::Model::initial_state(&fmu_model);
     let torque_nm = torque_nm.unwrap_or(model.pair.operating_torque_nm);
     let zeta = mesh_damping_ratio.unwrap_or(state.params.mesh_damping_ratio);

@@ -184,7 +184,7 @@ pub fn write(variables: &[Variable], facts: &ModelFacts) -> Result<String, Strin
 mod tests {
     use super::*;
     use fmi_schema::fmi2::{Causality, Fmi2ModelDescription};
-    use gearfmu::dynamics::fmu::Var;
+    use gearfmu::fmu::gear_pair::Var;
 
     fn xml() -> String {
         let starts = [("inertia_1", 1.0), ("inertia_2", 2.0), ("mesh_damping_ratio", 0.05), ("max_step", 1e-5)];

@@ -2,8 +2,8 @@
 //! penalty baseline, printed, as CSV and as a plot.
 
 use anyhow::{Context, Result};
+use gearfmu::closed_forms::iso6336;
 use gearfmu::contact::hertz::ApproachLaw;
-use gearfmu::dynamics::iso6336;
 use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::gear::{sig, GearPair};
 use gearfmu::rom::sweep::{Method, ReducedPair};

@@ -99,7 +99,7 @@ fn a_negative_rom_torque_is_refused_as_a_value_not_an_unknown_flag() {
 fn a_rom_torque_past_the_yield_torque_is_refused_before_the_build() {
     let dir = scratch("rom-yield");
     let out = dir.join("x.fmu");
-    // The Kurokawa spur pair yields at 1956 N·m (gear::rating).
+    // The Kurokawa spur pair yields at 1956 N·m (closed_forms::rating).
     refused(
         &["build", EXAMPLE, "-o", out.to_str().unwrap(), "--rom-torques-nm", "5000"],
         &["--rom-torques-nm", "yield torque"],

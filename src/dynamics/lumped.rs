@@ -12,7 +12,6 @@
 //! work is this torque. Damping c·δ̇ acts only while a flank is in contact; a flank never pulls.
 
 use super::mesh_law::{MeshForce, MeshLaw};
-use super::mesh_stiffness::{force_levels, static_deflection_table};
 use crate::gear::GearPair;
 use serde::{Deserialize, Serialize};
 
@@ -50,20 +49,16 @@ pub struct LumpedMesh {
     /// recompute it (an O(N) mean).
     pub reference_stiffness_n_per_m: f64,
     /// The mesh force (N, along the line of action) at which one pair carrying it at the tip
-    /// bends its root past the yield strength (`gear::rating::yield_mesh_force_n`): beyond it the
+    /// bends its root past the yield strength (`closed_forms::rating::yield_mesh_force_n`): beyond it the
     /// FMU logs a warning, once (the same rule as the PMOR-Hertz FMU's).
     pub yield_mesh_force_n: f64,
 }
 
-/// Roll-position samples per base pitch, axial slices for helical gears, force levels.
-pub const TABLE_SAMPLES: usize = 1024;
-pub const AXIAL_SLICES: usize = 40;
-pub const FORCE_LEVELS: usize = 24;
-
 /// The origin of a lumped mesh law.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum MeshLawSource {
-    /// Potential-energy teeth and Weber's contact on the geometry alone (`mesh_stiffness`): the
+    /// Potential-energy teeth and Weber's contact on the geometry alone
+    /// (`closed_forms::mesh_stiffness`, `LumpedMesh::from_pair`): the
     /// no-FE estimate.
     Analytic,
     /// The loaded transmission error of the PMOR-Hertz FE statics (`rom::static_mesh_law`).
@@ -71,16 +66,6 @@ pub enum MeshLawSource {
 }
 
 impl LumpedMesh {
-    /// Builds the lumped mesh from the geometry alone (potential-energy teeth, Hertz contact;
-    /// offline): the no-FE estimate.
-    pub fn from_pair(pair: &GearPair) -> Result<LumpedMesh, String> {
-        let levels = force_levels(pair, FORCE_LEVELS);
-        let (drive, pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
-        // The analytic law counts the pairs of the rigid geometry: the same under every force.
-        let drive_pairs = pairs.iter().flat_map(|&n| std::iter::repeat_n(n, levels.len())).collect();
-        Ok(Self::from_drive_law(pair, MeshLawSource::Analytic, drive, drive_pairs))
-    }
-
     /// The lumped mesh around a drive-flank law (rows at ξᵢ = i·p_b/N) and the tooth pairs in
     /// contact per row and force level; the coast flank mirrors it.
     pub fn from_drive_law(
@@ -123,7 +108,7 @@ impl LumpedMesh {
             coast_pairs,
             reference_force_n: reference_force,
             reference_stiffness_n_per_m: reference_stiffness,
-            yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(pair),
+            yield_mesh_force_n: crate::closed_forms::rating::yield_mesh_force_n(pair),
         }
     }
 

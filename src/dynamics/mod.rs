@@ -1,17 +1,12 @@
-//! Gear-pair dynamics: the fidelity levels (the lumped model, and the FE-based PMOR-Hertz reduced
-//! pair in `pmor`), each a `model_file::ModelKind`, and the FMU glue (`fmu`) that drives them.
+//! The gear-pair models the FMU runs, each a `model_file::ModelKind`: the lumped pair
+//! (`lumped`, its tabulated mesh law in `mesh_law`), the FE-based PMOR-Hertz reduced pair and
+//! the standard PMOR penalty reference (`pmor`); and the sub-stepping of a communication step
+//! they share. The FMU glue that drives them is `crate::fmu`.
 
-pub mod any_model;
-pub mod element_parameters;
-pub mod elements;
-pub mod fmu;
-pub mod iso6336;
 pub mod lumped;
 pub mod mesh_law;
-pub mod mesh_stiffness;
 pub mod pmor;
 pub mod rk4_stability;
-pub mod shared_model;
 
 /// The number of equal sub-steps no longer than `max_step` that cover `duration`: ⌈duration /
 /// max_step⌉, except that a quotient within a relative 1e-9 of a whole number is that number.

@@ -12,7 +12,7 @@
 //! (right hand: counter-clockwise, seen from +z, as z grows). z sectors share their borders.
 
 use super::mesh::Mesh;
-pub use super::mesh_spec::{MeshSpec, ProfileGrading};
+pub use crate::gear::mesh_spec::{MeshSpec, ProfileGrading};
 use crate::gear::{Gear, GearPair};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;

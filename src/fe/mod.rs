@@ -9,7 +9,6 @@ pub mod eigen;
 pub mod gear_mesh;
 pub mod hex8;
 pub mod mesh;
-pub mod mesh_spec;
 pub mod ordering;
 pub mod profile_png;
 pub mod tooth_stiffness;

@@ -2,7 +2,7 @@
 //! machine, checks every argument, logs through the master's callback and handles FMU states,
 //! and talks to a model only through [`Model`]. Modelled on modelica/Reference-FMUs: one generic
 //! set of entry points (`exports`), one guard with a table of allowed states (`instance`), and a
-//! small per-model implementation elsewhere (`crate::dynamics::fmu`).
+//! small per-model implementation elsewhere (`crate::fmu::gear_pair`).
 
 pub mod exports;
 pub mod instance;

@@ -5,8 +5,9 @@
 use super::involute::{inv, inv_inverse};
 use super::spec::PairSpec;
 use super::spec_error::{invalid, SpecError};
-use super::{fillet, modification, rating, sig, spec, Gear, GearPair};
+use super::{fillet, modification, sig, spec, Gear, GearPair};
 use super::{DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE, MAX_TEETH, MODULE_RANGE_MM, YIELD_RANGE_MPA};
+use crate::closed_forms::rating;
 use std::f64::consts::PI;
 
 impl GearPair {

@@ -7,9 +7,8 @@
 pub mod fillet;
 mod from_spec;
 pub mod involute;
+pub mod mesh_spec;
 pub mod modification;
-pub mod rating;
-pub mod root_stress;
 pub mod spec;
 pub mod spec_error;
 

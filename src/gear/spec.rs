@@ -138,7 +138,7 @@ pub struct LumpedSpec {
 #[serde(deny_unknown_fields)]
 pub struct OperatingSpec {
     /// The design torque on gear 1 (N·m). Default: the pair's rated torque
-    /// ([`crate::gear::rating::rated_torque_nm`], from the tooth-root stress and the yield
+    /// ([`crate::closed_forms::rating::rated_torque_nm`], from the tooth-root stress and the yield
     /// strength). The PMOR-Hertz build takes its static contact shapes at this torque, checks its
     /// step up to `STEP_LOAD_FACTOR` × it, and `fmu-build linearize` and the sweeps default to it.
     #[serde(default)]
@@ -161,7 +161,7 @@ pub struct PairSpec {
     pub operating: OperatingSpec,
     /// Finite element mesh resolution (defaults: the coarse test mesh).
     #[serde(default)]
-    pub mesh: crate::fe::mesh_spec::MeshSpec,
+    pub mesh: super::mesh_spec::MeshSpec,
 }
 
 fn one() -> f64 {

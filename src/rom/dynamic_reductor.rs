@@ -761,6 +761,14 @@ fn build_dynamic_model_dyn(
         });
     }
     let gears: [PmorGear; 2] = gears.try_into().map_err(|_| "two gears")?;
+    let penalty_layer_stiffness_n_per_m = match options.contact {
+        FlankContact::Hertz => Vec::new(),
+        FlankContact::Penalty { factor } => {
+            let layers = &gears[0].flank(Flank::Drive).grid.layer_z_m;
+            let stiffness = |l| crate::rom::statics::penalty_node_stiffness_n_per_m(pair, layers, l, factor);
+            (0..layers.len()).map(stiffness).collect()
+        }
+    };
     let mut model = PmorModel {
         pair: pair.clone(),
         gears,
@@ -782,6 +790,7 @@ fn build_dynamic_model_dyn(
             law: options.law,
             p_en: options.p_en,
             mesh: format!("{mesh:?}"),
+            penalty_layer_stiffness_n_per_m,
         },
     };
     progress("the mean mesh stiffness (static equilibria over a pitch)".into());

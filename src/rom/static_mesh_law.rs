@@ -19,7 +19,7 @@
 //! The mesh force F is the lumped model's: along the transverse line of action, with the torque
 //! on gear 1 T₁ = r_b1·F. Levels are dense at light load, where Hertz contact is most
 //! nonlinear (`mesh_stiffness::force_levels`' spacing), and stop at the yield force
-//! (`gear::rating`): the statics refuse a case beyond it, and the law continues past its last
+//! (`closed_forms::rating`): the statics refuse a case beyond it, and the law continues past its last
 //! level with its last slope, where the FMU already logs the yield warning.
 
 use super::statics::StaticModel;
@@ -39,7 +39,7 @@ pub const FORCE_LEVELS: usize = 24;
 /// The force levels: F_k = F_top·(k/K)², F_top the smaller of 1500 N/mm of face width (the
 /// analytic law's top) and the yield force.
 pub fn force_levels(pair: &GearPair, levels: usize) -> Vec<f64> {
-    let f_top = (1500.0e3 * pair.face_width_m).min(crate::gear::rating::yield_mesh_force_n(pair));
+    let f_top = (1500.0e3 * pair.face_width_m).min(crate::closed_forms::rating::yield_mesh_force_n(pair));
     (0..=levels).map(|k| f_top * (k as f64 / levels as f64).powi(2)).collect()
 }
 

@@ -133,7 +133,7 @@ def _textbook_contact_ratio(spec_path):
     return path / (math.pi * g["m_t"] * math.cos(g["alpha_t"]))
 
 
-# The mesh law against ISO 6336-1 (the dump's c_γα comes from src/dynamics/iso6336.rs, which
+# The mesh law against ISO 6336-1 (the dump's c_γα comes from src/closed_forms/iso6336.rs, which
 # reproduces ISO/TR 6336-30's worked example, tests/iso6336.rs), at the dump's reference force
 # (200 N/mm, inside ISO's 100-1000 N/mm), for both laws the lumped FMU can carry:
 #  - spur: where ISO's single stiffness c′ = c_γα/(0.75ε_α + 0.25) applies, the single-contact

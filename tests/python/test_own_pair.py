@@ -9,7 +9,7 @@
   explicit viscous brake fed back from ``w_2``. Evidence: the steady state's closed form — the
   speed ratio is z₂/z₁ and the brake's torque balances T₁·z₂/z₁, so ω₂ = T₁z₂/(z₁c).
 * Run-time validity, the same rule in both models: a mesh force past the yield of a tooth root
-  (one pair loaded at its tip, ``gear::rating``) is logged once as fmi2Warning, never silently.
+  (one pair loaded at its tip, ``closed_forms::rating``) is logged once as fmi2Warning, never silently.
 """
 
 from __future__ import annotations
@@ -159,7 +159,7 @@ def test_a_mesh_force_past_the_root_yield_is_logged_once_in_both_models(own_fmus
 
     fmu, unzip, torque, (z1, z2) = own_fmus[("small_spur", model)]
     name = f"yield_warning_{model}"
-    # The spec's rated torque is a third of the yield torque (gear::rating): 4.5 × it is 1.5 × past
+    # The spec's rated torque is a third of the yield torque (closed_forms::rating): 4.5 × it is 1.5 × past
     # yield. The lumped law carries it; the PMOR-Hertz model also says it is past its checked range.
     overload = 4.5 * torque
     slave, vr = _slave(fmu, unzip, name, callbacks=log_capture.callbacks)

@@ -19,7 +19,7 @@ from fmpy.fmi2 import (fmi2Discard, fmi2DoStepStatus, fmi2Error, fmi2LastSuccess
                        fmi2PendingStatus, fmi2Terminated)
 
 H = 1e-4
-# The stated bounds of src/dynamics/fmu.rs (MAX_SUBSTEPS_LUMPED / MAX_SUBSTEPS_PMOR).
+# The stated bounds of src/fmu/gear_pair.rs (MAX_SUBSTEPS_LUMPED / MAX_SUBSTEPS_PMOR).
 MAX_SUBSTEPS = {"lumped": 4e7, "pmor-hertz": 1e5}
 
 

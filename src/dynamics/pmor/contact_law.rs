@@ -26,8 +26,8 @@ pub fn contact_loads(
     damper_n_s_per_m: f64,
     collect_rows: bool,
 ) -> Result<ContactLoads, String> {
-    if let FlankContact::Penalty { factor } = model.info.contact {
-        return penalty_contact_loads(model, place, poses, restage, factor, damper_n_s_per_m, collect_rows);
+    if let FlankContact::Penalty { .. } = model.info.contact {
+        return penalty_contact_loads(model, place, poses, restage, damper_n_s_per_m, collect_rows);
     }
     section_contact_loads(model, place, poses, restage, loading, damper_n_s_per_m, collect_rows, &Flank::BOTH)
 }

@@ -14,10 +14,10 @@
 //! positions; the products are taken with the unclamped consistent mass, so (Gx)ᵀM(Gx) is the
 //! gear's polar moment of inertia.
 
+use crate::contact::flank_grid::FlankGrid;
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::Flank;
 use crate::gear::GearPair;
-use crate::rom::flank::FlankGrid;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -244,7 +244,7 @@ pub enum FlankContact {
     /// The standard PMOR of the paper (Sects. 4.1, 5.2; `--model pmor-penalty`), the reference
     /// PMOR-Hertz is compared with: shapes from the standard CMS statics, node-to-surface penalty
     /// contact, each node's stiffness `factor` × its share of ISO 6336-1's c_γα
-    /// (`rom::statics::penalty_node_stiffness_n_per_m`). Drive flanks only.
+    /// (`PmorBuildInfo::penalty_layer_stiffness_n_per_m`). Drive flanks only.
     Penalty { factor: f64 },
 }
 
@@ -259,6 +259,10 @@ pub struct PmorBuildInfo {
     pub law: ApproachLaw,
     pub p_en: f64,
     pub mesh: String,
+    /// The penalty reference's node stiffness per axial layer of the drive flank (N/m; empty for
+    /// PMOR-Hertz): `rom::statics::penalty_node_stiffness_n_per_m`, evaluated by the build so
+    /// the FMU's contact law reads it instead of calling offline code (design §2's seam).
+    pub penalty_layer_stiffness_n_per_m: Vec<f64>,
 }
 
 /// The reduced pair: everything the FMU steps.
@@ -338,7 +342,7 @@ impl PmorModel {
 }
 
 /// `STEP_LOAD_FACTOR` × the largest ROM torque, but no more than the pair's yield torque
-/// (`gear::rating`): beyond it the teeth yield and no linear-elastic model holds.
+/// (`closed_forms::rating`): beyond it the teeth yield and no linear-elastic model holds.
 pub fn step_load_ceiling_nm(model: &PmorModel) -> f64 {
     step_load_ceiling_of(&model.pair, &model.info.rom_torques_nm)
 }
@@ -346,5 +350,5 @@ pub fn step_load_ceiling_nm(model: &PmorModel) -> f64 {
 /// [`step_load_ceiling_nm`] of a pair built at `rom_torques_nm` (before its model exists).
 pub fn step_load_ceiling_of(pair: &crate::gear::GearPair, rom_torques_nm: &[f64]) -> f64 {
     let rom = rom_torques_nm.iter().cloned().fold(0.0, f64::max);
-    (STEP_LOAD_FACTOR * rom).min(crate::gear::rating::yield_torque_nm(pair).max(rom))
+    (STEP_LOAD_FACTOR * rom).min(crate::closed_forms::rating::yield_torque_nm(pair).max(rom))
 }

@@ -11,7 +11,7 @@
 //! the modifications' opening), u = V(ϑ)η the deformed flanks in the floating frames, m the point
 //! of the master's node layer at the node's radius, n_m the interpolated normal there. Its force is
 //! k·α for α > 0, k the node's share of the statics' penalty stiffness
-//! (`rom::statics::penalty_node_stiffness_n_per_m`), and its potential ½kα². The generalized
+//! (`rom::statics::penalty_node_stiffness_n_per_m`, evaluated by the build into `PmorBuildInfo`), and its potential ½kα². The generalized
 //! forces are the potential's gradient: on η exactly (α is linear in η), on the angles by
 //! central differences of the same α at fixed η (the node, the master point and the shapes all
 //! move with the angles; the tip corners' contact does this too, `contact`).
@@ -27,9 +27,8 @@
 use super::contact::{ContactLoads, GearPose, SectionRows};
 use super::equations::Stencil;
 use super::model::PmorModel;
+use crate::contact::flank_grid::Shares;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
-use crate::rom::flank::Shares;
-use crate::rom::statics::penalty_node_stiffness_n_per_m;
 
 /// Angle step of the central differences ∂α/∂θᵢ (rad).
 const ANGLE_STEP: f64 = 1e-7;
@@ -165,7 +164,6 @@ pub fn penalty_contact_loads(
     place: &PairPlacement,
     poses: [&GearPose; 2],
     restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
-    factor: f64,
     damper_n_s_per_m: f64,
     collect_rows: bool,
 ) -> Result<ContactLoads, String> {
@@ -215,9 +213,8 @@ pub fn penalty_contact_loads(
     let damped = damper_n_s_per_m > 0.0;
     let collect = damped || collect_rows;
     let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
-    // The node stiffness depends on the layer only: once per call, not per loaded node.
-    let layer_stiffness: Vec<f64> =
-        (0..layers.len()).map(|l| penalty_node_stiffness_n_per_m(&model.pair, layers, l, factor)).collect();
+    // The node stiffness depends on the layer only (the build's, from the ISO 6336-1 c_γα).
+    let layer_stiffness = &model.info.penalty_layer_stiffness_n_per_m;
     let mut sections: Vec<SectionRows> = Vec::new();
     let mut pair_forces: Vec<(i64, f64)> = Vec::new();
     let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];

@@ -20,10 +20,11 @@ mod dense;
 
 use super::flank::Shares;
 use super::reductor::ReducedGear;
+use crate::closed_forms::iso6336;
+use crate::closed_forms::root_stress;
 use crate::contact::hertz::ApproachLaw;
 use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
-use crate::dynamics::iso6336;
-use crate::gear::{root_stress, GearPair};
+use crate::gear::GearPair;
 
 /// How the flanks push on each other.
 #[derive(Debug, Clone, Copy, PartialEq)]

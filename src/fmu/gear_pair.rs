@@ -3,12 +3,12 @@
 //! lumped model or the PMOR-Hertz reduced pair), and steps it with sub-steps no longer than `max_step`
 //! (RK4; the PMOR-Hertz model's own integrator). Everything that changes lives in [`GearPairState`], so an FMU state is a copy of it.
 
-use super::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
-use super::pmor::model::PmorModel;
-use super::pmor::{PmorDynamics, PmorOutputs, PmorState};
 use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
+use crate::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
+use crate::dynamics::pmor::model::PmorModel;
 use crate::dynamics::pmor::quasi_static::{Condensation, GearSplit};
+use crate::dynamics::pmor::{PmorDynamics, PmorOutputs, PmorState};
 use crate::fmi2::{Model, Phase};
 use crate::gear::sig;
 use crate::interface;
@@ -170,7 +170,7 @@ impl PmorPortOutputs {
 #[derive(Debug, Clone, Copy)]
 pub struct Validity {
     /// [0] The mesh force at which one pair, loaded at its tip, bends its root past the yield
-    /// strength (`gear::rating::yield_mesh_force_n`): the linear-elastic teeth end there.
+    /// strength (`closed_forms::rating::yield_mesh_force_n`): the linear-elastic teeth end there.
     pub yield_mesh_force_n: f64,
     /// [1] The mesh force of the largest load the model was built and its step checked for
     /// (PMOR-Hertz: `PmorModel::linearization_torque_nm` / r_b1; the lumped law has no such bound:
@@ -331,7 +331,7 @@ impl LoadedPair {
                 let range_torque_nm = model.linearization_torque_nm();
                 // Forged model data may make these NaN: a NaN bound never warns, and nothing panics.
                 Validity {
-                    yield_mesh_force_n: crate::gear::rating::yield_mesh_force_n(&model.pair),
+                    yield_mesh_force_n: crate::closed_forms::rating::yield_mesh_force_n(&model.pair),
                     range_mesh_force_n: range_torque_nm / model.gears[0].base_radius_m,
                     range_torque_nm,
                 }
@@ -841,7 +841,7 @@ impl Model for GearPairFmu {
 
     fn check_step(&self, s: &GearPairState, h: f64) -> Result<(), String> {
         // The bound is about 10 s of work.
-        super::check_substep_bound(h, max_step(s.max_step_s)?, self.max_substeps())
+        crate::dynamics::check_substep_bound(h, max_step(s.max_step_s)?, self.max_substeps())
     }
 
     fn check_state(&self, s: &GearPairState, initialized: bool) -> Result<(), String> {

@@ -16,7 +16,7 @@
 //! 850 MPa) at 142 N·m.
 
 use super::root_stress::nominal_root_stress;
-use super::GearPair;
+use crate::gear::GearPair;
 
 /// σ_F0 at the rated torque as a share of the yield strength: 1/(Y_S·S_F) with Y_S = 2, S_F = 1.5.
 pub const RATED_ROOT_STRESS_OVER_YIELD: f64 = 1.0 / 3.0;
@@ -65,7 +65,7 @@ pub fn yield_mesh_force_n(pair: &GearPair) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gear::root_stress::check_root_stress;
+    use crate::closed_forms::root_stress::check_root_stress;
     use crate::gear::PairSpec;
 
     fn kurokawa_spur() -> GearPair {

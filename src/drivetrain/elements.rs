@@ -12,8 +12,8 @@
 //! The bodies (inertia, motor rotor, load) integrate J·ω̇ = τ_in + τ_drive(t, ω) − τ_resist(ω)
 //! with the input held over the step, in classical RK4 sub-steps no longer than `max_step`.
 
-use super::shared_model::SharedByContent;
 use crate::fmi2::{Model, Phase};
+use crate::fmu::shared_model::SharedByContent;
 use crate::interface::Variable;
 use crate::model_file::{ModelFile, ModelKind};
 use serde::{Deserialize, Serialize};
@@ -89,7 +89,7 @@ impl ElementState {
     /// Classical RK4 on (φ, ω) over h in equal sub-steps no longer than max_step.
     fn advance(&mut self, h: f64) {
         let Some((inertia, max_step)) = self.rotor_parameters() else { return };
-        let n = super::substep_count(h, max_step);
+        let n = crate::dynamics::substep_count(h, max_step);
         let dt = h / n as f64;
         let accel = |s: &Self, t: f64, w: f64| s.torque_nm(t, w) / inertia;
         for k in 0..n {
@@ -134,7 +134,7 @@ impl ElementFmu {
         static LOADED: SharedByContent<LoadedElement> = SharedByContent::new();
         let loaded =
             LOADED.get_or_load(bytes, |bytes| LoadedElement::from_model_file(ModelFile::from_bytes(bytes)?))?;
-        super::fmu::check_guid(&loaded.guid, guid)?;
+        crate::fmu::gear_pair::check_guid(&loaded.guid, guid)?;
         Ok(ElementFmu(loaded))
     }
 
@@ -255,7 +255,7 @@ impl Model for ElementFmu {
 
     fn check_step(&self, s: &ElementState, h: f64) -> Result<(), String> {
         let Some((_, max_step)) = s.rotor_parameters() else { return Ok(()) };
-        super::check_substep_bound(h, max_step, MAX_SUBSTEPS)
+        crate::dynamics::check_substep_bound(h, max_step, MAX_SUBSTEPS)
     }
 
     fn check_state(&self, s: &ElementState, initialized: bool) -> Result<(), String> {

@@ -13,7 +13,7 @@
 //! peak by 1.5–2 over this nominal value, so σ_F0 beyond the yield strength means a root far
 //! past yield.
 
-use super::{Gear, GearPair};
+use crate::gear::{Gear, GearPair};
 
 /// Sections sampled between the root circle and the load.
 const SECTIONS: usize = 200;

@@ -2,8 +2,8 @@
 //! drivetrain elements. The model file's kind picks the model at instantiation; each keeps its
 //! own interface and state, and this file only forwards.
 
-use super::elements::{ElementFmu, ElementState};
-use super::fmu::{GearPairFmu, GearPairState};
+use super::gear_pair::{GearPairFmu, GearPairState};
+use crate::drivetrain::elements::{ElementFmu, ElementState};
 use crate::fmi2::{Model, Phase};
 use crate::model_file::ModelFile;
 use serde::{Deserialize, Serialize};

@@ -24,8 +24,9 @@
 //! lines below the base circle, as some sources do, makes the root thinner and — through θ_f and
 //! S_f in the foundation term — the pair ~22 % softer than ISO 6336-1 for the Kurokawa gears.)
 
-use super::mesh_law::MeshLaw;
 use crate::contact::hertz::{series_force, ApproachLaw, Body, LineContact};
+use crate::dynamics::lumped::{LumpedMesh, MeshLawSource};
+use crate::dynamics::mesh_law::MeshLaw;
 use crate::gear::{Gear, GearPair, HertzContact};
 use rayon::prelude::*;
 
@@ -326,4 +327,22 @@ pub fn static_deflection_table(
         pairs.push(n);
     }
     Ok((MeshLaw::new(pair.base_pitch_m, levels.to_vec(), deflection), pairs))
+}
+
+/// The analytic lumped law's table: roll-position samples per base pitch, axial slices for
+/// helical gears, force levels.
+pub const TABLE_SAMPLES: usize = 1024;
+pub const AXIAL_SLICES: usize = 40;
+pub const FORCE_LEVELS: usize = 24;
+
+impl LumpedMesh {
+    /// Builds the lumped mesh from the geometry alone (potential-energy teeth, Hertz contact;
+    /// offline): the no-FE estimate.
+    pub fn from_pair(pair: &GearPair) -> Result<LumpedMesh, String> {
+        let levels = force_levels(pair, FORCE_LEVELS);
+        let (drive, pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
+        // The analytic law counts the pairs of the rigid geometry: the same under every force.
+        let drive_pairs = pairs.iter().flat_map(|&n| std::iter::repeat_n(n, levels.len())).collect();
+        Ok(Self::from_drive_law(pair, MeshLawSource::Analytic, drive, drive_pairs))
+    }
 }

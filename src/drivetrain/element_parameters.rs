@@ -1,7 +1,7 @@
 //! The drivetrain elements' kinds and parameters (issue 29): plain data, what an element FMU's
 //! model file carries (`model_file::ModelKind::Element`), checked against the rules of
 //! `modelDescription/elements.toml`, whose variables it also reads. The elements' physics and
-//! FMU glue are in `dynamics::elements`.
+//! FMU glue are in `drivetrain::elements`.
 
 use crate::interface::Variable;
 use serde::{Deserialize, Serialize};
