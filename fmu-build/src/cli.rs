@@ -156,6 +156,10 @@ pub(crate) enum Command {
         /// The lumped mesh law to print and dump (as `build --model lumped --mesh-law`).
         #[arg(long, value_enum, default_value = "fe")]
         mesh_law: MeshLawChoice,
+        /// Takes the law a built lumped FMU carries instead of making it (no FE work): what that
+        /// FMU runs. Built from SPEC, it says so, else refused.
+        #[arg(long, conflicts_with = "mesh_law")]
+        from_fmu: Option<PathBuf>,
         #[command(flatten)]
         resolution: Resolution,
     },

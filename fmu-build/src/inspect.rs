@@ -1,17 +1,25 @@
 //! `fmu-build inspect`: a pair's geometry, ISO 6336-1 stiffness and lumped mesh law, printed
 //! and optionally dumped as JSON.
 
-use anyhow::Result;
+use anyhow::{bail, Context, Result};
 use gearfmu::closed_forms::iso6336;
-use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedParameters};
+use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
 use gearfmu::gear::sig;
+use gearfmu::gear::GearPair;
+use gearfmu::model_file::ModelKind;
 use std::path::{Path, PathBuf};
 
 use crate::cli::{pair_and_mesh, MeshLawChoice, Resolution};
 
 use crate::build_command::lumped_mesh;
 
-pub(crate) fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, resolution: Resolution) -> Result<()> {
+pub(crate) fn inspect(
+    spec: &Path,
+    json: Option<PathBuf>,
+    law: MeshLawChoice,
+    from_fmu: Option<&Path>,
+    resolution: Resolution,
+) -> Result<()> {
     let (pair, mesh_spec) = pair_and_mesh(spec, resolution)?;
     let iso = iso6336::mesh_stiffness_c_gamma_alpha(&pair);
     let iso_total = iso6336::to_newton_per_metre(iso, pair.face_width_m);
@@ -33,7 +41,10 @@ pub(crate) fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, re
     );
     println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
     // The geometry is printed; the mesh law takes its FE statics now (with `--mesh-law fe`).
-    let mesh = lumped_mesh(&pair, &mesh_spec, law, None)?;
+    let mesh = match from_fmu {
+        Some(fmu) => lumped_mesh_of_fmu(fmu, &pair)?,
+        None => lumped_mesh(&pair, &mesh_spec, law, None)?,
+    };
     let params = LumpedParameters::defaults(&mesh);
     for specific_load in [50.0, 100.0, 200.0, 400.0] {
         let force = specific_load * 1e3 * pair.face_width_m;
@@ -79,4 +90,33 @@ pub(crate) fn inspect(spec: &Path, json: Option<PathBuf>, law: MeshLawChoice, re
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// The lumped mesh law a built lumped FMU carries (its `resources/` model file), checked to be
+/// of the spec's pair: its teeth, base radii and base pitch must be the spec's.
+fn lumped_mesh_of_fmu(fmu: &Path, pair: &GearPair) -> Result<LumpedMesh> {
+    use std::io::Read;
+    let file = std::fs::File::open(fmu).with_context(|| format!("cannot open {}", fmu.display()))?;
+    let mut archive =
+        zip::ZipArchive::new(file).with_context(|| format!("{} is not an FMU (a zip archive)", fmu.display()))?;
+    let name = format!("resources/{}", gearfmu::model_file::FILE_NAME);
+    let mut bytes = Vec::new();
+    archive
+        .by_name(&name)
+        .with_context(|| format!("{} has no {name}: not a gearfmu FMU", fmu.display()))?
+        .read_to_end(&mut bytes)?;
+    let model = gearfmu::model_file::ModelFile::from_bytes(&bytes).map_err(anyhow::Error::msg)?;
+    let ModelKind::Lumped(mesh) = model.model else {
+        bail!("{} is not a lumped FMU (build it with --model lumped or --lumped-fmu)", fmu.display());
+    };
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+    if mesh.teeth_1 != pair.gear1.teeth
+        || mesh.teeth_2 != pair.gear2.teeth
+        || !same(mesh.base_radius_1_m, pair.gear1.base_radius_m)
+        || !same(mesh.base_radius_2_m, pair.gear2.base_radius_m)
+        || !same(mesh.base_pitch_m, pair.base_pitch_m)
+    {
+        bail!("{} was not built from this spec (pair {}): its teeth or base radii differ", fmu.display(), pair.name);
+    }
+    Ok(mesh)
 }

@@ -29,7 +29,9 @@ fn main() {
         Command::Build { spec, output, model, mesh_law, lumped_fmu, library, rom, resolution } => {
             build_command::build(&spec, &output, model, mesh_law, lumped_fmu.as_deref(), library, &rom, resolution)
         }
-        Command::Inspect { spec, json, mesh_law, resolution } => inspect::inspect(&spec, json, mesh_law, resolution),
+        Command::Inspect { spec, json, mesh_law, from_fmu, resolution } => {
+            inspect::inspect(&spec, json, mesh_law, from_fmu.as_deref(), resolution)
+        }
         Command::Mesh { spec, resolution, vtk, png } => fe_views::mesh_command(&spec, resolution, vtk, png),
         Command::ToothStiffness { spec, resolution } => fe_views::tooth_stiffness_command(&spec, resolution),
         Command::Modes { spec, count, resolution, vtk, whole_gear } => {

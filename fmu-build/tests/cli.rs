@@ -190,3 +190,24 @@ fn inspect_prints_the_operating_point() {
     let line = text.lines().find(|l| l.contains("torque on gear 1")).expect("a torque line");
     assert!(line.contains("operating 250 N·m"), "{line}");
 }
+
+/// `inspect --from-fmu` reads back the law a lumped FMU carries (evidence: the law `inspect`
+/// makes itself from the same spec, the same JSON to the byte; `--mesh-law analytic` both ways,
+/// so no FE work); an FMU of another pair is refused, naming the file.
+#[test]
+fn inspect_from_a_lumped_fmu_dumps_the_law_it_carries_and_refuses_another_pairs() {
+    let dir = scratch("from-fmu");
+    let spur = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/kurokawa_spur.toml");
+    let helical = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/kurokawa_helical.toml");
+    let (fmu, made, carried) = (dir.join("lumped.fmu"), dir.join("made.json"), dir.join("carried.json"));
+    let fmu = fmu.to_str().unwrap();
+    let (ok, text) = fmu_build(&["build", spur, "-o", fmu, "--model", "lumped", "--mesh-law", "analytic"]);
+    assert!(ok, "{text}");
+    let (ok, text) = fmu_build(&["inspect", spur, "--mesh-law", "analytic", "--json", made.to_str().unwrap()]);
+    assert!(ok, "{text}");
+    let (ok, text) = fmu_build(&["inspect", spur, "--from-fmu", fmu, "--json", carried.to_str().unwrap()]);
+    assert!(ok, "{text}");
+    let read = |p: &PathBuf| std::fs::read_to_string(p).unwrap();
+    assert_eq!(read(&made), read(&carried), "the FMU's law differs from the one inspect makes");
+    refused(&["inspect", helical, "--from-fmu", fmu], &["was not built from this spec"]);
+}
