@@ -182,7 +182,8 @@ def impl_edges(crate: Crate, edges) -> dict:
     for m, text in crate.text.items():
         for found in IMPL.finditer(text):
             owners = definers.get(found.group(1), [])
-            owners = [o for o in owners if o in edges[m]] or owners if len(owners) > 1 else owners
+            # A name defined in several files: the one this file imports, where it imports one.
+            owners = [o for o in owners if o in edges[m]] or owners
             for owner in owners:
                 same_module = (owner[:-1] if crate.modules[owner].stem != "mod" else owner) == m[:-1]
                 if owner != m and same_module:

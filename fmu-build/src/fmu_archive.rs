@@ -1,5 +1,6 @@
-//! The FMU archive: modelDescription.xml, the model file and the FMU binary zipped; where the
-//! binary comes from (`--library`, else beside fmu-build); the output folder checked first.
+//! The FMU archive: modelDescription.xml, the model file and the FMU binary zipped, and the model
+//! file read back from a built FMU; where the binary comes from (`--library`, else beside
+//! fmu-build); the output folder checked first.
 
 use anyhow::{Context, Result};
 use gearfmu::dynamics::pmor::model::FlankContact;
@@ -125,4 +126,20 @@ pub(crate) fn fmu_archive(xml: &str, file: &ModelFile, so: &[u8]) -> Result<Vec<
     zip.start_file(format!("resources/{}", gearfmu::model_file::FILE_NAME), options)?;
     zip.write_all(&file.to_bytes())?;
     Ok(zip.finish()?.into_inner())
+}
+
+/// The model file a built gearfmu FMU carries (`resources/model.bin`), read back: what
+/// `linearize` and `inspect --from-fmu` work on.
+pub(crate) fn read_model_file(fmu: &Path) -> Result<ModelFile> {
+    use std::io::Read;
+    let file = std::fs::File::open(fmu).with_context(|| format!("cannot open {}", fmu.display()))?;
+    let mut archive =
+        zip::ZipArchive::new(file).with_context(|| format!("{} is not an FMU (a zip archive)", fmu.display()))?;
+    let name = format!("resources/{}", gearfmu::model_file::FILE_NAME);
+    let mut bytes = Vec::new();
+    archive
+        .by_name(&name)
+        .with_context(|| format!("{} has no {name}: not a gearfmu FMU", fmu.display()))?
+        .read_to_end(&mut bytes)?;
+    ModelFile::from_bytes(&bytes).map_err(anyhow::Error::msg)
 }

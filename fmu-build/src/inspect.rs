@@ -1,7 +1,7 @@
 //! `fmu-build inspect`: a pair's geometry, ISO 6336-1 stiffness and lumped mesh law, printed
 //! and optionally dumped as JSON.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use gearfmu::closed_forms::iso6336;
 use gearfmu::dynamics::lumped::{mesh_damping_coefficient, mesh_natural_frequency_hz, LumpedMesh, LumpedParameters};
 use gearfmu::gear::sig;
@@ -95,18 +95,7 @@ pub(crate) fn inspect(
 /// The lumped mesh law a built lumped FMU carries (its `resources/` model file), checked to be
 /// of the spec's pair: its teeth, base radii and base pitch must be the spec's.
 fn lumped_mesh_of_fmu(fmu: &Path, pair: &GearPair) -> Result<LumpedMesh> {
-    use std::io::Read;
-    let file = std::fs::File::open(fmu).with_context(|| format!("cannot open {}", fmu.display()))?;
-    let mut archive =
-        zip::ZipArchive::new(file).with_context(|| format!("{} is not an FMU (a zip archive)", fmu.display()))?;
-    let name = format!("resources/{}", gearfmu::model_file::FILE_NAME);
-    let mut bytes = Vec::new();
-    archive
-        .by_name(&name)
-        .with_context(|| format!("{} has no {name}: not a gearfmu FMU", fmu.display()))?
-        .read_to_end(&mut bytes)?;
-    let model = gearfmu::model_file::ModelFile::from_bytes(&bytes).map_err(anyhow::Error::msg)?;
-    let ModelKind::Lumped(mesh) = model.model else {
+    let ModelKind::Lumped(mesh) = crate::fmu_archive::read_model_file(fmu)?.model else {
         bail!("{} is not a lumped FMU (build it with --model lumped or --lumped-fmu)", fmu.display());
     };
     let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();

@@ -1,7 +1,7 @@
 //! `fmu-build linearize`: a built FMU's pair linearized about its static equilibria: natural
 //! frequencies and the explicit step's stability limit.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use gearfmu::model_file::{ModelFile, ModelKind};
 use std::path::Path;
 
@@ -13,14 +13,7 @@ pub(crate) fn linearize_command(
     count: usize,
 ) -> Result<()> {
     use gearfmu::dynamics::pmor::linear;
-    let file = std::fs::File::open(fmu).with_context(|| format!("cannot open {}", fmu.display()))?;
-    let mut archive = zip::ZipArchive::new(file).with_context(|| format!("{} is not an FMU (zip)", fmu.display()))?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(
-        &mut archive.by_name("resources/model.bin").context("the FMU has no resources/model.bin")?,
-        &mut bytes,
-    )?;
-    let ModelKind::PmorHertz(model) = ModelFile::from_bytes(&bytes).map_err(anyhow::Error::msg)?.model else {
+    let ModelKind::PmorHertz(model) = crate::fmu_archive::read_model_file(fmu)?.model else {
         anyhow::bail!(
             "{} carries the lumped model: its linearized mesh frequency is sqrt(k (r_b1²/J1 + r_b2²/J2))/2π with k its mesh_stiffness output (`inspect`)",
             fmu.display()
