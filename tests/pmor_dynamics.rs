@@ -17,6 +17,7 @@ use gearfmu::fe::clamped_gear::ClampedGear;
 use gearfmu::fe::eigen;
 use gearfmu::fe::gear_mesh::MeshSpec;
 use gearfmu::fe::hex8::Formulation;
+use gearfmu::rom::build_cache::{build_dynamic_model_reusing, BuildCache};
 use gearfmu::rom::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions, DynamicBuildReport};
 use gearfmu::rom::sweep::{Method, ReducedPair};
 use std::f64::consts::PI;
@@ -37,12 +38,14 @@ const STATIC_ANGLES: usize = 40;
 
 /// The reduced pair of an example spec on its own mesh, with the PMOR-Hertz statics of the same
 /// pair reduced separately (the reference: `fmu-build ste` with the ROM's depth and p_en).
+/// Through the build cache where GEARFMU_BUILD_CACHE is set (scripts/test.sh): the spur pair's
+/// model is `fmi_c_api`'s too, and a run of unchanged code builds none of them again.
 fn build_fixture(file: &str, lumped_mesh_law: bool) -> Fixture {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
     let spec = gearfmu::gear::PairSpec::load(&path).unwrap();
     let pair = gearfmu::gear::GearPair::from_spec(&spec).unwrap();
     let options = DynamicBuildOptions { lumped_mesh_law, ..Default::default() };
-    let (model, report) = build_dynamic_model(&pair, &spec.mesh, &options, |_| {}).unwrap();
+    let (model, report) = build_dynamic_model_reusing(&pair, &spec.mesh, &options, |_| {}).unwrap();
     let method = Method::PmorHertz { depth_m: options.depth_m, p_en: options.p_en, law: ApproachLaw::Weber };
     let reduced = ReducedPair::build(&pair, &spec.mesh, method, |_, _| {}).unwrap();
     let cases = reduced.sweep(&STATIC_TORQUES, STATIC_ANGLES, 1.0);
@@ -1405,4 +1408,57 @@ fn at_the_mesh_resonance_the_default_pair_steps_with_the_speed_and_keeps_its_ene
     // The discrete gradient closes each step's balance to 1e-7 of the elastic energy (its
     // Newton tolerance): over the run's 1500 steps the sum stays far below 1e-3 of it.
     assert!(balance.abs() < 1e-3 * peak_stored, "energy balance {balance:e} J against {peak_stored:e} J stored");
+}
+
+/// The build cache (evidence: the build itself, run again). An entry read back is the model and
+/// report the build made, bit for bit; another option is another entry; an entry that does not
+/// read back (cut short) is built again and replaced, never taken.
+#[test]
+fn the_build_cache_returns_what_the_build_makes() {
+    let dir = std::env::temp_dir().join(format!("gearfmu-build-cache-test-{}", std::process::id()));
+    let cache = BuildCache::new(&dir);
+    let pair = common::kurokawa_spur();
+    let mesh = MeshSpec::default();
+    // A small basis: the cache stores whatever the build makes; its size does not matter here.
+    let options = DynamicBuildOptions { modes: 6, angles: 8, ..Default::default() };
+    let heard = std::sync::Mutex::new(Vec::<String>::new());
+    let listen = |m: String| heard.lock().unwrap().push(m);
+    let reused = |heard: &std::sync::Mutex<Vec<String>>| heard.lock().unwrap().iter().any(|m| m.starts_with("reused"));
+
+    // An entry of other code (another digest) and a file that is no entry.
+    std::fs::create_dir_all(&dir).unwrap();
+    let stale = dir.join("pmor-0000000000000000-0123.postcard");
+    let other_file = dir.join("notes.txt");
+    std::fs::write(&stale, b"a model of other code").unwrap();
+    std::fs::write(&other_file, b"kept").unwrap();
+
+    let built = cache.build_dynamic_model(&pair, &mesh, &options, listen).unwrap();
+    assert!(!reused(&heard), "an empty cache cannot reuse");
+    let entry = cache.entry(&pair, &mesh, &options);
+    assert!(entry.is_file(), "the build stores its entry");
+    assert!(!stale.exists(), "storing removes the entries of other code");
+    assert!(other_file.exists(), "and nothing else");
+    let read_back = cache.build_dynamic_model(&pair, &mesh, &options, listen).unwrap();
+    assert!(reused(&heard), "the second build of the same model reads the entry");
+    assert_eq!(read_back.0, built.0, "the model read back is the one built");
+    assert_eq!(format!("{:?}", read_back.1), format!("{:?}", built.1), "the report read back is the one built");
+
+    // Any input changed is another entry: the angular samples, the mesh, the pair by one ulp.
+    let other = DynamicBuildOptions { angles: 10, ..options.clone() };
+    assert_ne!(cache.entry(&pair, &mesh, &other), entry);
+    let finer = MeshSpec { elements_in_rim: mesh.elements_in_rim + 1, ..mesh };
+    assert_ne!(cache.entry(&pair, &finer, &options), entry);
+    let mut wider = pair.clone();
+    wider.face_width_m = f64::from_bits(pair.face_width_m.to_bits() + 1); // one ulp wider
+    assert_ne!(cache.entry(&wider, &mesh, &options), entry);
+
+    // An entry cut short is built again (the same model) and replaced by a whole one.
+    let whole = std::fs::read(&entry).unwrap();
+    std::fs::write(&entry, &whole[..whole.len() / 2]).unwrap();
+    heard.lock().unwrap().clear();
+    let rebuilt = cache.build_dynamic_model(&pair, &mesh, &options, listen).unwrap();
+    assert!(!reused(&heard), "a cut entry is not taken");
+    assert_eq!(rebuilt.0, built.0);
+    assert_eq!(std::fs::read(&entry).unwrap(), whole, "the cut entry is replaced by the whole one");
+    std::fs::remove_dir_all(&dir).ok();
 }

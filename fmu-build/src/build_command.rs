@@ -195,7 +195,8 @@ pub(crate) fn build_rom(
     use gearfmu::dynamics::pmor::integrator::Integrator;
     use gearfmu::dynamics::pmor::model::Interpolation;
     use gearfmu::dynamics::pmor::quasi_static::Condensation;
-    use gearfmu::rom::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions};
+    use gearfmu::rom::build_cache::build_dynamic_model_reusing;
+    use gearfmu::rom::dynamic_reductor::DynamicBuildOptions;
     let rom_torques_nm = rom.rom_torques_nm.clone().unwrap_or_else(|| vec![pair.operating_torque_nm]);
     let yield_torque = gearfmu::closed_forms::rating::yield_torque_nm(pair);
     if let Some(t) = rom_torques_nm.iter().find(|t| **t > yield_torque) {
@@ -275,7 +276,8 @@ pub(crate) fn build_rom(
     let bar = spinner("PMOR-Hertz build".into());
     // Each stage's start, for the report of where the offline time goes.
     let stages = std::sync::Mutex::new(Vec::<(String, std::time::Instant)>::new());
-    let (model, report) = build_dynamic_model(pair, mesh, &options, |m| {
+    // Through the build cache where GEARFMU_BUILD_CACHE names one (a hit: one stage, "reused").
+    let (model, report) = build_dynamic_model_reusing(pair, mesh, &options, |m| {
         stages.lock().unwrap().push((m.clone(), std::time::Instant::now()));
         bar.stage(m)
     })

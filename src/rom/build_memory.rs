@@ -5,6 +5,8 @@
 //! other, and one that will not fit that way is refused with the figure, before the expensive
 //! part starts.
 
+use serde::{Deserialize, Serialize};
+
 /// What one gear's FE stage will hold, in counts (all known before its factorization).
 #[derive(Debug, Clone, Copy)]
 pub struct GearSizes {
@@ -40,7 +42,7 @@ const F64: f64 = 8.0;
 const SPARSE_ENTRY: f64 = 16.0;
 
 /// One gear's share of the peak (bytes).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GearMemory {
     /// The highest the gear's FE stage (factor, eigenmodes, attachment modes) reaches.
     pub fe_stage_peak: f64,
@@ -89,7 +91,7 @@ impl GearSizes {
 }
 
 /// How the two gears' FE stages run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Schedule {
     /// Side by side (`rayon::join`): the faster, the peaks add up.
     SideBySide,
@@ -98,7 +100,7 @@ pub enum Schedule {
 }
 
 /// The build's estimated peak (bytes) under each schedule.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BuildMemory {
     pub gears: [GearMemory; 2],
 }

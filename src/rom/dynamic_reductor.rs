@@ -37,6 +37,7 @@ use crate::gear::GearPair;
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// The choices of the offline build.
 #[derive(Debug, Clone, PartialEq)]
@@ -106,7 +107,7 @@ impl Default for DynamicBuildOptions {
 }
 
 /// What the build measured, for the user and the tests.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct DynamicBuildReport {
     /// Per gear: n_k kept, FE eigenfrequencies (Hz) of Φ.
     pub modes_hz: [Vec<f64>; 2],

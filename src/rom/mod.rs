@@ -2,6 +2,7 @@
 //! SVD compression, the static contact solver and the ROM file.
 
 pub mod attachment;
+pub mod build_cache;
 pub mod build_memory;
 pub mod dynamic_reductor;
 pub mod flank;

@@ -27,6 +27,7 @@ use crate::contact::mesh_kinematics::Flank;
 use crate::dynamics::mesh_law::MeshLaw;
 use crate::gear::GearPair;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// Roll positions per base pitch and force levels of the FE-fed law, chosen by measurement
 /// (BENCHMARKS §9): against the statics at 200 positions and 22–700 N·m on the Kurokawa spur
@@ -173,7 +174,7 @@ fn drive_law_from_statics_dyn(
 
 /// The FE-fed law: the drive flank's table, its tooth-pair counts, and where the statics ended it
 /// below the planned top level (if they did).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StaticMeshLaw {
     pub law: MeshLaw,
     pub pairs: Vec<u32>,

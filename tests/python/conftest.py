@@ -76,6 +76,9 @@ def build_workspace() -> None:
 # Options whose value is a file fmu-build writes: the cache stores those files.
 OUTPUT_OPTIONS = ("-o", "--output", "--lumped-fmu", "--json", "--csv", "--png", "--vtk")
 CACHE_DIR = REPO_ROOT / "target" / "fmu-cache"
+# The library's build cache (src/rom/build_cache.rs): a model the Rust tests built is not reduced
+# again by the fmu-build calls here (scripts/test.sh sets it for both; pytest alone sets it too).
+os.environ.setdefault("GEARFMU_BUILD_CACHE", str(REPO_ROOT / "target" / "build-cache"))
 
 
 @functools.lru_cache(maxsize=None)

@@ -16,6 +16,7 @@ use super::model::FlankContact;
 use super::{PmorDynamics, PmorState};
 use crate::contact::mesh_kinematics::Flank;
 use nalgebra::{Complex, DMatrix, DVector};
+use serde::{Deserialize, Serialize};
 
 /// Fraction of the stability limit taken as the default step: room for the transient loads of
 /// impacts and re-engagement and for a user's larger damping ratios. On example 3 the DTE at
@@ -23,7 +24,7 @@ use nalgebra::{Complex, DMatrix, DVector};
 pub const STEP_SAFETY: f64 = 0.6;
 
 /// How a reduced pair's default step is chosen (`default_step`).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct IntegratorStep {
     /// The load of the linearization (N·m on gear 1).
     pub torque_nm: f64,
