@@ -182,13 +182,20 @@ fn mesh_counts_are_range_checked() {
 }
 
 /// The spec's defaults reach what the user runs: `inspect` prints the operating, rated and yield
-/// torques (the example sets 250 N·m; a third of the yield torque is the rating).
+/// torques (the example sets 250 N·m; a third of the yield torque is the rating), and the gear
+/// loss factor of the library's closed form (`closed_forms::gear_loss`) with its efficiency.
 #[test]
 fn inspect_prints_the_operating_point() {
     let (ok, text) = fmu_build(&["inspect", EXAMPLE]);
     assert!(ok, "{text}");
     let line = text.lines().find(|l| l.contains("torque on gear 1")).expect("a torque line");
     assert!(line.contains("operating 250 N·m"), "{line}");
+    let spec = gearfmu::gear::PairSpec::load(std::path::Path::new(EXAMPLE)).unwrap();
+    let h_v = gearfmu::closed_forms::gear_loss::gear_loss_factor(&gearfmu::gear::GearPair::from_spec(&spec).unwrap())
+        .unwrap();
+    let line = text.lines().find(|l| l.contains("gear loss factor")).expect("a gear loss line");
+    assert!(line.contains(&format!("H_V {h_v:.4}")), "{line}");
+    assert!(line.contains(&format!("{:.2} % at μ = 0.05", 100.0 * (1.0 - 0.05 * h_v))), "{line}");
 }
 
 /// `inspect --from-fmu` reads back the law a lumped FMU carries (evidence: the law `inspect`

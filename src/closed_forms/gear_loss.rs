@@ -1,0 +1,186 @@
+//! Mesh friction's kinematics and ISO/TR 14179-2's gear loss factor H_V (issue 42): the closed
+//! forms the tooth friction of the dynamics is to be checked against.
+//!
+//! A contact at u (from T₁ along the transverse line of action) lies on two involutes whose radii
+//! of curvature are ρ₁ = u and ρ₂ = T₁T₂ − u. Each flank's surface moves along the common tangent
+//! at its gear's speed times its ρ, so the flanks slide at v_g = ω₁ρ₁ − ω₂ρ₂ (the speeds in each
+//! gear's own sense of mesh rotation, design §3): zero at the pitch point C, where ω₁·r_b1 =
+//! ω₂·r_b2, and of opposite sign on either side of it. The friction force μF acts along that
+//! tangent, and the foot of each gear's axis on the tangent is its base-circle tangent point, so
+//! its arm about gear i is ρᵢ: the friction torque changes sign at C with the sliding.
+//!
+//! Averaged over a mesh cycle with ISO's load sharing (the whole transverse load on a pair alone,
+//! half of it on each of two pairs), the loss is P_V = μ·H_V·P_A with
+//! H_V = π(u + 1)/(z₁·u·cos β_b) · (1 − ε_α + ε₁² + ε₂²), u = z₂/z₁, ε₁ and ε₂ the addendum
+//! contact ratios of gear 1 (the recess, C to E) and of gear 2 (the approach, A to C)
+//! (ISO/TR 14179-2:2001, after Ohlendorf; valid for 1 ≤ ε_α < 2 with ε₁, ε₂ < 1, which
+//! `gear_loss_factor` checks).
+
+use crate::gear::GearPair;
+
+/// The flanks' sliding speed at a contact u (m from T₁ on the transverse line of action), m/s:
+/// ω₁ρ₁ − ω₂ρ₂, positive where gear 1's flank runs ahead of gear 2's (beyond the pitch point
+/// when the pair rolls forward: gear 1's addendum, the recess).
+pub fn sliding_velocity_m_per_s(pair: &GearPair, u_m: f64, omega_1_rad_s: f64, omega_2_rad_s: f64) -> f64 {
+    let (rho_1, rho_2) = pair.radii_of_curvature(u_m);
+    omega_1_rad_s * rho_1 - omega_2_rad_s * rho_2
+}
+
+/// The arms (m) of a friction force along the common tangent at u about gear 1's and gear 2's
+/// axes: the radii of curvature ρ₁ = u and ρ₂ = T₁T₂ − u.
+pub fn friction_arms_m(pair: &GearPair, u_m: f64) -> [f64; 2] {
+    let (rho_1, rho_2) = pair.radii_of_curvature(u_m);
+    [rho_1, rho_2]
+}
+
+/// The addendum contact ratios [ε₁, ε₂]: gear 1's (pitch point C to the path's end E, the recess
+/// when gear 1 drives) and gear 2's (the path's start A to C), each over the transverse base
+/// pitch; ε₁ + ε₂ = ε_α.
+pub fn addendum_contact_ratios(pair: &GearPair) -> [f64; 2] {
+    let c = pair.pitch_point_m();
+    [(pair.path_end_m - c) / pair.base_pitch_m, (c - pair.path_start_m) / pair.base_pitch_m]
+}
+
+/// ISO/TR 14179-2's gear loss factor H_V (module doc): P_V = μ·H_V·P_A, the mesh efficiency
+/// 1 − μ·H_V. An error names the rule where the pair is outside the formula's range (ε_α ≥ 2,
+/// an addendum contact ratio ≥ 1, or the pitch point off the path).
+pub fn gear_loss_factor(pair: &GearPair) -> Result<f64, String> {
+    let [e1, e2] = addendum_contact_ratios(pair);
+    let e_alpha = e1 + e2;
+    if !(1.0..2.0).contains(&e_alpha) || !(0.0..1.0).contains(&e1) || !(0.0..1.0).contains(&e2) {
+        return Err(format!(
+            "ISO/TR 14179-2's H_V holds for 1 ≤ ε_α < 2 with each addendum contact ratio in [0, 1); this pair has \
+             ε_α = {e_alpha:.4} (ε₁ = {e1:.4}, ε₂ = {e2:.4})"
+        ));
+    }
+    let u = pair.gear2.teeth as f64 / pair.gear1.teeth as f64;
+    Ok(std::f64::consts::PI * (u + 1.0) / (pair.gear1.teeth as f64 * u * pair.base_helix_angle_rad.cos())
+        * (1.0 - e_alpha + e1 * e1 + e2 * e2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gear::PairSpec;
+
+    fn pair(toml: &str) -> GearPair {
+        GearPair::from_spec(&PairSpec::from_toml(toml).unwrap()).unwrap()
+    }
+
+    fn examples() -> Vec<GearPair> {
+        vec![
+            pair(include_str!("../../examples/kurokawa_spur.toml")),
+            pair(include_str!("../../examples/kurokawa_helical.toml")),
+            pair(include_str!("../../examples/small_spur.toml")),
+            pair(include_str!("../../examples/small_helical.toml")),
+        ]
+    }
+
+    /// The sliding speed from the flanks' own surface speeds (evidence: rigid-body kinematics, no
+    /// involute formula): each point of gear i moves at ωᵢ × r; the contact's two surface speeds
+    /// along the common tangent (perpendicular to the line of action) differ by v_g, which is
+    /// zero at the pitch point and (ω₁ + ω₂)·(u − C) along the path.
+    #[test]
+    fn the_sliding_speed_is_the_difference_of_the_flanks_surface_speeds() {
+        for p in examples() {
+            let (w1, w2) = (100.0, 100.0 * p.gear1.teeth as f64 / p.gear2.teeth as f64);
+            let alpha = p.operating_pressure_angle_rad;
+            // The frame: O₁ at the origin, O₂ on +x at the centre distance; the line of action
+            // from T₁ (on gear 1's base circle) to T₂, direction t.
+            let t = [alpha.sin(), alpha.cos()];
+            let t1 = [p.gear1.base_radius_m * alpha.cos(), -p.gear1.base_radius_m * alpha.sin()];
+            let tangent = [t[1], -t[0]];
+            for k in 0..=10 {
+                let u = p.path_start_m + p.path_length_m() * k as f64 / 10.0;
+                let point = [t1[0] + u * t[0], t1[1] + u * t[1]];
+                // Gear 1 turns one way, gear 2 the other (external mesh): v = ω × r about each centre.
+                let v1 = [-w1 * point[1], w1 * point[0]];
+                let from_2 = [point[0] - p.center_distance_m, point[1]];
+                let v2 = [w2 * from_2[1], -w2 * from_2[0]];
+                let along = |v: [f64; 2]| v[0] * tangent[0] + v[1] * tangent[1];
+                let normal = |v: [f64; 2]| v[0] * t[0] + v[1] * t[1];
+                assert!((normal(v1) - normal(v2)).abs() < 1e-9 * w1, "the flanks do not part along the normal");
+                let kinematic = (along(v1) - along(v2)).abs();
+                let closed = sliding_velocity_m_per_s(&p, u, w1, w2);
+                assert!(
+                    (kinematic - closed.abs()).abs() < 1e-9 * w1,
+                    "{}: u {u}: {kinematic} against {closed}",
+                    p.name
+                );
+                let linear = (w1 + w2) * (u - p.pitch_point_m());
+                assert!((closed - linear).abs() < 1e-9 * w1, "{}: {closed} against (ω₁ + ω₂)(u − C) {linear}", p.name);
+            }
+            assert!(sliding_velocity_m_per_s(&p, p.pitch_point_m(), w1, w2).abs() < 1e-9 * w1);
+        }
+    }
+
+    /// The friction torques' arms (evidence: the moment of a force along the tangent through the
+    /// contact point, from the coordinates): about each axis, the radius of curvature, and the
+    /// friction torque on gear 1, μF·ρ₁ against the sliding, changes sign at the pitch point.
+    #[test]
+    fn the_friction_arms_are_the_radii_of_curvature_and_the_torque_turns_at_the_pitch_point() {
+        for p in examples() {
+            let alpha = p.operating_pressure_angle_rad;
+            let t = [alpha.sin(), alpha.cos()];
+            let t1 = [p.gear1.base_radius_m * alpha.cos(), -p.gear1.base_radius_m * alpha.sin()];
+            let tangent = [t[1], -t[0]];
+            let (w1, w2) = (1.0, p.gear1.teeth as f64 / p.gear2.teeth as f64);
+            let mut signs = Vec::new();
+            for k in 0..=20 {
+                let u = p.path_start_m + p.path_length_m() * k as f64 / 20.0;
+                let point = [t1[0] + u * t[0], t1[1] + u * t[1]];
+                let moment_about = |centre: [f64; 2]| {
+                    let r = [point[0] - centre[0], point[1] - centre[1]];
+                    (r[0] * tangent[1] - r[1] * tangent[0]).abs()
+                };
+                let arms = friction_arms_m(&p, u);
+                assert!((moment_about([0.0, 0.0]) - arms[0]).abs() < 1e-12);
+                assert!((moment_about([p.center_distance_m, 0.0]) - arms[1]).abs() < 1e-12);
+                let v = sliding_velocity_m_per_s(&p, u, w1, w2);
+                // The friction on gear 1's flank opposes its sliding relative to gear 2's.
+                let torque_1 = -v.signum() * arms[0];
+                if v.abs() > 1e-12 {
+                    signs.push((u < p.pitch_point_m(), torque_1 > 0.0));
+                }
+            }
+            // Before the pitch point friction drives gear 1 (its flank is slower), after it brakes it.
+            assert!(signs.iter().all(|&(approach, drives)| approach == drives), "{}: {signs:?}", p.name);
+        }
+    }
+
+    /// H_V against the mesh cycle it averages (evidence: the loss summed over roll positions):
+    /// pairs one base pitch apart along the path, ISO's sharing (the load on one pair, half on
+    /// each of two), the instantaneous loss μ·Σ F_j·|v_g(u_j)|/cos β_b over the input power
+    /// F_bt·ω₁·r_b1, averaged over 20 000 positions.
+    #[test]
+    fn the_gear_loss_factor_is_the_mesh_cycle_mean_of_the_sliding_loss() {
+        for p in examples() {
+            let h_v = gear_loss_factor(&p).unwrap();
+            let (w1, w2) = (1.0, p.gear1.teeth as f64 / p.gear2.teeth as f64);
+            let positions = 20_000;
+            let mut sum = 0.0;
+            for k in 0..positions {
+                let lead = p.path_start_m + p.base_pitch_m * (k as f64 + 0.5) / positions as f64;
+                let in_contact: Vec<f64> = (0..3)
+                    .map(|j| lead + j as f64 * p.base_pitch_m)
+                    .filter(|u| (p.path_start_m..=p.path_end_m).contains(u))
+                    .collect();
+                let share = 1.0 / in_contact.len() as f64; // F_bt = 1 N
+                sum += in_contact.iter().map(|&u| share * sliding_velocity_m_per_s(&p, u, w1, w2).abs()).sum::<f64>()
+                    / p.base_helix_angle_rad.cos();
+            }
+            let mean = sum / positions as f64 / (w1 * p.gear1.base_radius_m);
+            assert!((mean / h_v - 1.0).abs() < 1e-4, "{}: mean {mean} against H_V {h_v}", p.name);
+        }
+    }
+
+    /// Outside its range the formula is refused with the rule: a pair with ε_α ≥ 2 (tips raised
+    /// until the path spans two base pitches).
+    #[test]
+    fn the_gear_loss_factor_refuses_a_contact_ratio_of_two() {
+        let mut p = examples().remove(0);
+        p.path_end_m = p.path_start_m + 2.05 * p.base_pitch_m;
+        let message = gear_loss_factor(&p).unwrap_err();
+        assert!(message.contains("1 ≤ ε_α < 2"), "{message}");
+    }
+}
