@@ -1,5 +1,5 @@
-//! The code's digest, `GEARFMU_CODE_DIGEST`: the library's sources and the locked dependencies,
-//! hashed. The build cache (`rom::build_cache`) keys every model by it, so it never hands out a
+//! The code's digest, `GEARFMU_CODE_DIGEST`: the library's sources, the locked dependencies and
+//! the compiler's version, hashed. The build cache (`rom::build_cache`) keys every model by it, so it never hands out a
 //! model that other code built.
 
 use std::hash::{DefaultHasher, Hasher};
@@ -35,6 +35,12 @@ fn main() {
             h.write_usize(bytes.len());
             h.write(&bytes);
         }
+    }
+    // The compiler too: another rustc may compile the same sources to other floating-point code.
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let version = std::process::Command::new(rustc).arg("-vV").output().map(|o| o.stdout).unwrap_or_default();
+    for h in &mut halves {
+        h.write(&version);
     }
     println!("cargo:rustc-env=GEARFMU_CODE_DIGEST={:016x}{:016x}", halves[0].finish(), halves[1].finish());
     for watched in ["src", "Cargo.toml", "Cargo.lock", "build.rs"] {

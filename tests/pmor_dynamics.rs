@@ -1420,7 +1420,10 @@ fn the_build_cache_returns_what_the_build_makes() {
     let pair = common::kurokawa_spur();
     let mesh = MeshSpec::default();
     // A small basis: the cache stores whatever the build makes; its size does not matter here.
-    let options = DynamicBuildOptions { modes: 6, angles: 8, ..Default::default() };
+    // No memory limit: the schedule (and so the report's bytes) may not follow MemAvailable
+    // between the builds compared below.
+    let options =
+        DynamicBuildOptions { modes: 6, angles: 8, memory_limit_bytes: Some(f64::INFINITY), ..Default::default() };
     let heard = std::sync::Mutex::new(Vec::<String>::new());
     let listen = |m: String| heard.lock().unwrap().push(m);
     let reused = |heard: &std::sync::Mutex<Vec<String>>| heard.lock().unwrap().iter().any(|m| m.starts_with("reused"));
@@ -1443,7 +1446,9 @@ fn the_build_cache_returns_what_the_build_makes() {
     assert_eq!(read_back.0, built.0, "the model read back is the one built");
     assert_eq!(format!("{:?}", read_back.1), format!("{:?}", built.1), "the report read back is the one built");
 
-    // Any input changed is another entry: the angular samples, the mesh, the pair by one ulp.
+    // The memory limit is no part of the key (it decides the schedule only); any input is: the
+    // angular samples, the mesh, the pair by one ulp.
+    assert_eq!(cache.entry(&pair, &mesh, &DynamicBuildOptions { memory_limit_bytes: None, ..options.clone() }), entry);
     let other = DynamicBuildOptions { angles: 10, ..options.clone() };
     assert_ne!(cache.entry(&pair, &mesh, &other), entry);
     let finer = MeshSpec { elements_in_rim: mesh.elements_in_rim + 1, ..mesh };
@@ -1452,13 +1457,18 @@ fn the_build_cache_returns_what_the_build_makes() {
     wider.face_width_m = f64::from_bits(pair.face_width_m.to_bits() + 1); // one ulp wider
     assert_ne!(cache.entry(&wider, &mesh, &options), entry);
 
-    // An entry cut short is built again (the same model) and replaced by a whole one.
+    // An entry cut short, or of the right length but zeroed past its digest (a crash's leftover),
+    // is built again (the same model) and replaced by a whole one.
     let whole = std::fs::read(&entry).unwrap();
-    std::fs::write(&entry, &whole[..whole.len() / 2]).unwrap();
-    heard.lock().unwrap().clear();
-    let rebuilt = cache.build_dynamic_model(&pair, &mesh, &options, listen).unwrap();
-    assert!(!reused(&heard), "a cut entry is not taken");
-    assert_eq!(rebuilt.0, built.0);
-    assert_eq!(std::fs::read(&entry).unwrap(), whole, "the cut entry is replaced by the whole one");
+    let mut zeroed = whole.clone();
+    zeroed[32..].fill(0);
+    for damaged in [whole[..whole.len() / 2].to_vec(), zeroed] {
+        std::fs::write(&entry, &damaged).unwrap();
+        heard.lock().unwrap().clear();
+        let rebuilt = cache.build_dynamic_model(&pair, &mesh, &options, listen).unwrap();
+        assert!(!reused(&heard), "a damaged entry is not taken");
+        assert_eq!(rebuilt.0, built.0);
+        assert_eq!(std::fs::read(&entry).unwrap(), whole, "the damaged entry is replaced by the whole one");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

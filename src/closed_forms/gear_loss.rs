@@ -6,8 +6,9 @@
 //! at its gear's speed times its ρ, so the flanks slide at v_g = ω₁ρ₁ − ω₂ρ₂ (the speeds in each
 //! gear's own sense of mesh rotation, design §3): zero at the pitch point C, where ω₁·r_b1 =
 //! ω₂·r_b2, and of opposite sign on either side of it. The friction force μF acts along that
-//! tangent, and the foot of each gear's axis on the tangent is its base-circle tangent point, so
-//! its arm about gear i is ρᵢ: the friction torque changes sign at C with the sliding.
+//! tangent, which is parallel to OᵢTᵢ (both are perpendicular to the line of action), so its
+//! distance from the axis Oᵢ is TᵢP = ρᵢ: the friction torque on each gear is μF·ρᵢ, and it changes
+//! sign at C with the sliding.
 //!
 //! Averaged over a mesh cycle with ISO's load sharing (the whole transverse load on a pair alone,
 //! half of it on each of two pairs), the loss is P_V = μ·H_V·P_A with
@@ -42,8 +43,8 @@ pub fn addendum_contact_ratios(pair: &GearPair) -> [f64; 2] {
 }
 
 /// ISO/TR 14179-2's gear loss factor H_V (module doc): P_V = μ·H_V·P_A, the mesh efficiency
-/// 1 − μ·H_V. An error names the rule where the pair is outside the formula's range (ε_α ≥ 2,
-/// an addendum contact ratio ≥ 1, or the pitch point off the path).
+/// 1 − μ·H_V. An error names the rule where the pair is outside the formula's range (ε_α < 1 or
+/// ≥ 2, an addendum contact ratio ≥ 1, or the pitch point off the path).
 pub fn gear_loss_factor(pair: &GearPair) -> Result<f64, String> {
     let [e1, e2] = addendum_contact_ratios(pair);
     let e_alpha = e1 + e2;
@@ -100,13 +101,12 @@ mod tests {
                 let along = |v: [f64; 2]| v[0] * tangent[0] + v[1] * tangent[1];
                 let normal = |v: [f64; 2]| v[0] * t[0] + v[1] * t[1];
                 assert!((normal(v1) - normal(v2)).abs() < 1e-9 * w1, "the flanks do not part along the normal");
-                let kinematic = (along(v1) - along(v2)).abs();
+                // Both surfaces move along −tangent when the pair rolls forward: gear 1's runs
+                // ahead of gear 2's by along(v2) − along(v1).
+                assert!(along(v1) <= 0.0 && along(v2) <= 0.0);
+                let kinematic = along(v2) - along(v1);
                 let closed = sliding_velocity_m_per_s(&p, u, w1, w2);
-                assert!(
-                    (kinematic - closed.abs()).abs() < 1e-9 * w1,
-                    "{}: u {u}: {kinematic} against {closed}",
-                    p.name
-                );
+                assert!((kinematic - closed).abs() < 1e-9 * w1, "{}: u {u}: {kinematic} against {closed}", p.name);
                 let linear = (w1 + w2) * (u - p.pitch_point_m());
                 assert!((closed - linear).abs() < 1e-9 * w1, "{}: {closed} against (ω₁ + ω₂)(u − C) {linear}", p.name);
             }
@@ -114,37 +114,59 @@ mod tests {
         }
     }
 
-    /// The friction torques' arms (evidence: the moment of a force along the tangent through the
-    /// contact point, from the coordinates): about each axis, the radius of curvature, and the
-    /// friction torque on gear 1, μF·ρ₁ against the sliding, changes sign at the pitch point.
+    /// The friction torques (evidence: the moment of the friction force about each axis, from the
+    /// coordinates and the flanks' rigid-body surface speeds): a unit force along the common
+    /// tangent against gear 1's sliding relative to gear 2 (and its reaction on gear 2) has the
+    /// moment −sgn(v_g)·ρ₁ about O₁ in gear 1's sense and +sgn(v_g)·ρ₂ about O₂ in gear 2's, the
+    /// closed form's arms: friction drives gear 1 before the pitch point (its flank the slower)
+    /// and brakes it after.
     #[test]
-    fn the_friction_arms_are_the_radii_of_curvature_and_the_torque_turns_at_the_pitch_point() {
+    fn the_friction_torques_have_the_radii_of_curvature_as_arms_and_turn_at_the_pitch_point() {
         for p in examples() {
             let alpha = p.operating_pressure_angle_rad;
             let t = [alpha.sin(), alpha.cos()];
             let t1 = [p.gear1.base_radius_m * alpha.cos(), -p.gear1.base_radius_m * alpha.sin()];
             let tangent = [t[1], -t[0]];
             let (w1, w2) = (1.0, p.gear1.teeth as f64 / p.gear2.teeth as f64);
-            let mut signs = Vec::new();
+            let o2 = [p.center_distance_m, 0.0];
+            let cross = |r: [f64; 2], f: [f64; 2]| r[0] * f[1] - r[1] * f[0];
+            let mut sides = [false, false];
             for k in 0..=20 {
-                let u = p.path_start_m + p.path_length_m() * k as f64 / 20.0;
+                let u = p.path_start_m + p.path_length_m() * (k as f64 + 0.25) / 20.5;
                 let point = [t1[0] + u * t[0], t1[1] + u * t[1]];
-                let moment_about = |centre: [f64; 2]| {
-                    let r = [point[0] - centre[0], point[1] - centre[1]];
-                    (r[0] * tangent[1] - r[1] * tangent[0]).abs()
-                };
+                let v1 = [-w1 * point[1], w1 * point[0]];
+                let from_2 = [point[0] - o2[0], point[1] - o2[1]];
+                let v2 = [w2 * from_2[1], -w2 * from_2[0]];
+                // Gear 1's surface against gear 2's, along the tangent; the friction on gear 1 opposes it.
+                let slip = (v1[0] - v2[0]) * tangent[0] + (v1[1] - v2[1]) * tangent[1];
+                let on_1 = [-slip.signum() * tangent[0], -slip.signum() * tangent[1]];
+                // Gear 1 turns counter-clockwise here, gear 2 clockwise (each its own sense).
+                let torque_1 = cross(point, on_1);
+                let torque_2 = -cross(from_2, [-on_1[0], -on_1[1]]);
+                let v_g = sliding_velocity_m_per_s(&p, u, w1, w2);
                 let arms = friction_arms_m(&p, u);
-                assert!((moment_about([0.0, 0.0]) - arms[0]).abs() < 1e-12);
-                assert!((moment_about([p.center_distance_m, 0.0]) - arms[1]).abs() < 1e-12);
-                let v = sliding_velocity_m_per_s(&p, u, w1, w2);
-                // The friction on gear 1's flank opposes its sliding relative to gear 2's.
-                let torque_1 = -v.signum() * arms[0];
-                if v.abs() > 1e-12 {
-                    signs.push((u < p.pitch_point_m(), torque_1 > 0.0));
-                }
+                assert!((torque_1 + v_g.signum() * arms[0]).abs() < 1e-12, "{}: u {u}: {torque_1}", p.name);
+                assert!((torque_2 - v_g.signum() * arms[1]).abs() < 1e-12, "{}: u {u}: {torque_2}", p.name);
+                let approach = u < p.pitch_point_m();
+                assert_eq!(torque_1 > 0.0, approach, "{}: u {u}: friction drives gear 1 in the approach only", p.name);
+                sides[approach as usize] = true;
             }
-            // Before the pitch point friction drives gear 1 (its flank is slower), after it brakes it.
-            assert!(signs.iter().all(|&(approach, drives)| approach == drives), "{}: {signs:?}", p.name);
+            assert_eq!(sides, [true, true], "{}: both sides of the pitch point sampled", p.name);
+        }
+    }
+
+    /// The addendum contact ratios from the tip circles (evidence: the involute's roll length
+    /// √(r_a² − r_b²) to each tip): ε₁ is gear 1's, from C to its tip, ε₂ gear 2's.
+    #[test]
+    fn the_addendum_contact_ratios_are_each_gears_tip_over_the_base_pitch() {
+        for p in examples() {
+            let [e1, e2] = addendum_contact_ratios(&p);
+            let roll = |g: &crate::gear::Gear| (g.tip_radius_m.powi(2) - g.base_radius_m.powi(2)).sqrt();
+            let c = p.pitch_point_m();
+            let c_from_t2 = p.loa_length_m() - c;
+            assert!((e1 * p.base_pitch_m - (roll(&p.gear1) - c)).abs() < 1e-12, "{}", p.name);
+            assert!((e2 * p.base_pitch_m - (roll(&p.gear2) - c_from_t2)).abs() < 1e-12, "{}", p.name);
+            assert!((e1 + e2 - p.transverse_contact_ratio).abs() < 1e-9, "{}", p.name);
         }
     }
 
@@ -174,13 +196,23 @@ mod tests {
         }
     }
 
-    /// Outside its range the formula is refused with the rule: a pair with ε_α ≥ 2 (tips raised
-    /// until the path spans two base pitches).
+    /// Outside its range the formula is refused with the rule, each bound on its own: ε_α below 1,
+    /// an addendum contact ratio of 1 or more with ε_α below 2, and ε_α of 2 (the path moved
+    /// along the line of action about the pitch point).
     #[test]
-    fn the_gear_loss_factor_refuses_a_contact_ratio_of_two() {
-        let mut p = examples().remove(0);
-        p.path_end_m = p.path_start_m + 2.05 * p.base_pitch_m;
-        let message = gear_loss_factor(&p).unwrap_err();
-        assert!(message.contains("1 ≤ ε_α < 2"), "{message}");
+    fn the_gear_loss_factor_refuses_a_pair_outside_its_range() {
+        let p = examples().remove(0);
+        let c = p.pitch_point_m();
+        let with_path = |e2: f64, e1: f64| GearPair {
+            path_start_m: c - e2 * p.base_pitch_m,
+            path_end_m: c + e1 * p.base_pitch_m,
+            ..p.clone()
+        };
+        assert!(gear_loss_factor(&with_path(0.8, 0.7)).is_ok());
+        for (e2, e1) in [(0.5, 0.4), (0.3, 1.2), (1.1, 0.5), (1.0, 1.0)] {
+            let message = gear_loss_factor(&with_path(e2, e1)).unwrap_err();
+            assert!(message.contains("1 ≤ ε_α < 2"), "{message}");
+            assert!(message.contains(&format!("ε₁ = {e1:.4}, ε₂ = {e2:.4}")), "{message}");
+        }
     }
 }

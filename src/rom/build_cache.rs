@@ -2,10 +2,14 @@
 //! that builds one — the Rust tests, `fmu-build` and the Python tests that call it (issue 41).
 //!
 //! An entry is keyed by everything that decides the model: the code (`GEARFMU_CODE_DIGEST`, the
-//! library's sources and locked dependencies, from `build.rs`), the build profile, the pair, the
-//! mesh and the build options. A hit is therefore the model and report this code builds on this
-//! machine, bit for bit (`the_build_cache_returns_what_the_build_makes` in `pmor_dynamics`). The
-//! cache is off unless asked for: `GEARFMU_BUILD_CACHE=<directory>`.
+//! library's sources, locked dependencies and the compiler, from `build.rs`), the build profile,
+//! the pair, the mesh and the build options. A hit is therefore the model this code builds on
+//! this machine, bit for bit (`the_build_cache_returns_what_the_build_makes` in `pmor_dynamics`),
+//! and the report of the build that stored it: its memory estimate and schedule are that
+//! build's (they depend on the threads and the memory available then, and decide only the order
+//! of the work, not the model: `tests/build_memory.rs`, `a_build_that_does_not_fit_runs_the_gears_one_after_the_other_or_is_refused_with_the_figure`),
+//! so the memory limit is no part of the key and a hit is not refused for memory. The cache is
+//! off unless asked for: `GEARFMU_BUILD_CACHE=<directory>`.
 
 use super::dynamic_reductor::{build_dynamic_model, DynamicBuildOptions, DynamicBuildReport};
 use crate::dynamics::pmor::model::PmorModel;
@@ -43,6 +47,8 @@ impl BuildCache {
     /// shortest text that reads back to the same bits), so two builds that differ in any input
     /// have different keys.
     pub fn entry(&self, pair: &GearPair, mesh: &MeshSpec, options: &DynamicBuildOptions) -> PathBuf {
+        // The memory limit decides the schedule, not the model (module doc).
+        let options = DynamicBuildOptions { memory_limit_bytes: None, ..options.clone() };
         let mut key = Sha256::new();
         key.update(CODE_DIGEST.as_bytes());
         key.update(if cfg!(debug_assertions) { b"\0debug" } else { b"\0optim" });
@@ -68,9 +74,7 @@ impl BuildCache {
         progress: impl Fn(String) + Sync,
     ) -> Result<(PmorModel, DynamicBuildReport), String> {
         let entry = self.entry(pair, mesh, options);
-        if let Some(stored) =
-            std::fs::read(&entry).ok().and_then(|b| postcard::from_bytes::<(PmorModel, DynamicBuildReport)>(&b).ok())
-        {
+        if let Some(stored) = std::fs::read(&entry).ok().and_then(|bytes| Self::read_back(&bytes)) {
             progress(format!("reused from the build cache ({})", entry.display()));
             return Ok(stored);
         }
@@ -82,9 +86,19 @@ impl BuildCache {
         Ok(built)
     }
 
-    /// Written beside, then renamed: an entry is whole or absent, whoever reads it meanwhile.
-    /// The entries of other code go (they can never be hit again).
+    /// An entry's bytes: the SHA-256 of the payload, then the payload (postcard). A file cut short
+    /// or filled by a crash fails the digest and is never taken for a model.
+    fn read_back(bytes: &[u8]) -> Option<(PmorModel, DynamicBuildReport)> {
+        let (digest, payload) = bytes.split_at_checked(32)?;
+        (Sha256::digest(payload).as_slice() == digest).then(|| postcard::from_bytes(payload).ok()).flatten()
+    }
+
+    /// Written beside under a name of its own (process and call), synced, then renamed: an entry
+    /// is whole or absent, whoever reads it meanwhile. The entries of other code go (they can
+    /// never be hit again).
     fn store(&self, entry: &Path, built: &(PmorModel, DynamicBuildReport)) -> std::io::Result<()> {
+        use std::io::Write;
+        static STORES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         std::fs::create_dir_all(&self.dir)?;
         let ours = Self::code_prefix();
         for old in std::fs::read_dir(&self.dir)?.filter_map(|e| e.ok()).map(|e| e.file_name()) {
@@ -93,9 +107,13 @@ impl BuildCache {
                 std::fs::remove_file(self.dir.join(&old)).ok(); // another process may have removed it
             }
         }
-        let bytes = postcard::to_stdvec(built).map_err(std::io::Error::other)?;
-        let partial = entry.with_extension(format!("partial-{}", std::process::id()));
-        std::fs::write(&partial, bytes)?;
+        let payload = postcard::to_stdvec(built).map_err(std::io::Error::other)?;
+        let call = STORES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let partial = entry.with_extension(format!("partial-{}-{call}", std::process::id()));
+        let mut file = std::fs::OpenOptions::new().write(true).create_new(true).open(&partial)?;
+        file.write_all(&Sha256::digest(&payload))?;
+        file.write_all(&payload)?;
+        file.sync_all()?;
         std::fs::rename(&partial, entry)
     }
 }
