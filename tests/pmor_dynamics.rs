@@ -1412,7 +1412,7 @@ fn at_the_mesh_resonance_the_default_pair_steps_with_the_speed_and_keeps_its_ene
 
 /// The build cache (evidence: the build itself, run again). An entry read back is the model and
 /// report the build made, bit for bit; another option is another entry; an entry that does not
-/// read back (cut short) is built again and replaced, never taken.
+/// read back (cut short, or zeroed past its digest) is built again and replaced, never taken.
 #[test]
 fn the_build_cache_returns_what_the_build_makes() {
     let dir = std::env::temp_dir().join(format!("gearfmu-build-cache-test-{}", std::process::id()));

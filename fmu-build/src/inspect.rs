@@ -41,13 +41,15 @@ pub(crate) fn inspect(
     );
     println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
     // The sliding loss estimate a drivetrain engineer starts from (the FMUs carry no friction yet).
-    match gearfmu::closed_forms::gear_loss::gear_loss_factor(&pair) {
-        Ok(h_v) => println!(
-            "  ISO/TR 14179-2 gear loss factor H_V {h_v:.4}: mesh efficiency 1 − μ·H_V = {:.2} % at μ = 0.05 (addendum contact ratios ε₁ {:.4}, ε₂ {:.4})",
-            100.0 * (1.0 - 0.05 * h_v),
-            gearfmu::closed_forms::gear_loss::addendum_contact_ratios(&pair)[0],
-            gearfmu::closed_forms::gear_loss::addendum_contact_ratios(&pair)[1]
-        ),
+    use gearfmu::closed_forms::gear_loss::{addendum_contact_ratios, gear_loss_factor};
+    match gear_loss_factor(&pair) {
+        Ok(h_v) => {
+            let [e1, e2] = addendum_contact_ratios(&pair);
+            println!(
+                "  ISO/TR 14179-2 gear loss factor H_V {h_v:.4}: mesh efficiency 1 − μ·H_V = {:.2} % at μ = 0.05 (addendum contact ratios ε₁ {e1:.4}, ε₂ {e2:.4})",
+                100.0 * (1.0 - 0.05 * h_v)
+            )
+        }
         Err(why) => println!("  gear loss factor H_V: not given: {why}"),
     }
     // The geometry is printed; the mesh law takes its FE statics now (with `--mesh-law fe`).

@@ -77,6 +77,40 @@ mod tests {
         ]
     }
 
+    /// A contact at u in coordinates, the rigid-body evidence of the tests below. The frame: O₁
+    /// at the origin, O₂ on +x at the centre distance; the line of action from T₁ (on gear 1's
+    /// base circle) towards T₂, direction `loa`; `tangent` the flanks' common tangent. Gear 1
+    /// turns counter-clockwise at ω₁, gear 2 clockwise at ω₂ (each its own sense of mesh
+    /// rotation); each surface point moves at ω × r about its centre.
+    struct RigidContact {
+        loa: [f64; 2],
+        tangent: [f64; 2],
+        point: [f64; 2],
+        from_2: [f64; 2],
+        v1: [f64; 2],
+        v2: [f64; 2],
+    }
+
+    fn rigid_contact(p: &GearPair, u: f64, w1: f64, w2: f64) -> RigidContact {
+        let alpha = p.operating_pressure_angle_rad;
+        let loa = [alpha.sin(), alpha.cos()];
+        let t1 = [p.gear1.base_radius_m * alpha.cos(), -p.gear1.base_radius_m * alpha.sin()];
+        let point = [t1[0] + u * loa[0], t1[1] + u * loa[1]];
+        let from_2 = [point[0] - p.center_distance_m, point[1]];
+        RigidContact {
+            loa,
+            tangent: [loa[1], -loa[0]],
+            point,
+            from_2,
+            v1: [-w1 * point[1], w1 * point[0]],
+            v2: [w2 * from_2[1], -w2 * from_2[0]],
+        }
+    }
+
+    fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+        a[0] * b[0] + a[1] * b[1]
+    }
+
     /// The sliding speed from the flanks' own surface speeds (evidence: rigid-body kinematics, no
     /// involute formula): each point of gear i moves at ωᵢ × r; the contact's two surface speeds
     /// along the common tangent (perpendicular to the line of action) differ by v_g, which is
@@ -85,22 +119,11 @@ mod tests {
     fn the_sliding_speed_is_the_difference_of_the_flanks_surface_speeds() {
         for p in examples() {
             let (w1, w2) = (100.0, 100.0 * p.gear1.teeth as f64 / p.gear2.teeth as f64);
-            let alpha = p.operating_pressure_angle_rad;
-            // The frame: O₁ at the origin, O₂ on +x at the centre distance; the line of action
-            // from T₁ (on gear 1's base circle) to T₂, direction t.
-            let t = [alpha.sin(), alpha.cos()];
-            let t1 = [p.gear1.base_radius_m * alpha.cos(), -p.gear1.base_radius_m * alpha.sin()];
-            let tangent = [t[1], -t[0]];
             for k in 0..=10 {
                 let u = p.path_start_m + p.path_length_m() * k as f64 / 10.0;
-                let point = [t1[0] + u * t[0], t1[1] + u * t[1]];
-                // Gear 1 turns one way, gear 2 the other (external mesh): v = ω × r about each centre.
-                let v1 = [-w1 * point[1], w1 * point[0]];
-                let from_2 = [point[0] - p.center_distance_m, point[1]];
-                let v2 = [w2 * from_2[1], -w2 * from_2[0]];
-                let along = |v: [f64; 2]| v[0] * tangent[0] + v[1] * tangent[1];
-                let normal = |v: [f64; 2]| v[0] * t[0] + v[1] * t[1];
-                assert!((normal(v1) - normal(v2)).abs() < 1e-9 * w1, "the flanks do not part along the normal");
+                let RigidContact { loa, tangent, v1, v2, .. } = rigid_contact(&p, u, w1, w2);
+                let along = |v: [f64; 2]| dot(v, tangent);
+                assert!((dot(v1, loa) - dot(v2, loa)).abs() < 1e-9 * w1, "the flanks do not part along the normal");
                 // Both surfaces move along −tangent when the pair rolls forward: gear 1's runs
                 // ahead of gear 2's by along(v2) − along(v1).
                 assert!(along(v1) <= 0.0 && along(v2) <= 0.0);
@@ -123,24 +146,16 @@ mod tests {
     #[test]
     fn the_friction_torques_have_the_radii_of_curvature_as_arms_and_turn_at_the_pitch_point() {
         for p in examples() {
-            let alpha = p.operating_pressure_angle_rad;
-            let t = [alpha.sin(), alpha.cos()];
-            let t1 = [p.gear1.base_radius_m * alpha.cos(), -p.gear1.base_radius_m * alpha.sin()];
-            let tangent = [t[1], -t[0]];
             let (w1, w2) = (1.0, p.gear1.teeth as f64 / p.gear2.teeth as f64);
-            let o2 = [p.center_distance_m, 0.0];
             let cross = |r: [f64; 2], f: [f64; 2]| r[0] * f[1] - r[1] * f[0];
             let mut sides = [false, false];
             for k in 0..=20 {
                 let u = p.path_start_m + p.path_length_m() * (k as f64 + 0.25) / 20.5;
-                let point = [t1[0] + u * t[0], t1[1] + u * t[1]];
-                let v1 = [-w1 * point[1], w1 * point[0]];
-                let from_2 = [point[0] - o2[0], point[1] - o2[1]];
-                let v2 = [w2 * from_2[1], -w2 * from_2[0]];
+                let RigidContact { tangent, point, from_2, v1, v2, .. } = rigid_contact(&p, u, w1, w2);
                 // Gear 1's surface against gear 2's, along the tangent; the friction on gear 1 opposes it.
-                let slip = (v1[0] - v2[0]) * tangent[0] + (v1[1] - v2[1]) * tangent[1];
+                let slip = dot([v1[0] - v2[0], v1[1] - v2[1]], tangent);
                 let on_1 = [-slip.signum() * tangent[0], -slip.signum() * tangent[1]];
-                // Gear 1 turns counter-clockwise here, gear 2 clockwise (each its own sense).
+                // Moments in each gear's own sense: counter-clockwise for gear 1, clockwise for gear 2.
                 let torque_1 = cross(point, on_1);
                 let torque_2 = -cross(from_2, [-on_1[0], -on_1[1]]);
                 let v_g = sliding_velocity_m_per_s(&p, u, w1, w2);

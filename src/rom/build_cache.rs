@@ -39,10 +39,6 @@ impl BuildCache {
         std::env::var_os(BUILD_CACHE_ENV).filter(|d| !d.is_empty()).map(BuildCache::new)
     }
 
-    pub fn dir(&self) -> &Path {
-        &self.dir
-    }
-
     /// The entry of a model. Debug formatting is exact for every field (an `f64` prints the
     /// shortest text that reads back to the same bits), so two builds that differ in any input
     /// have different keys.
