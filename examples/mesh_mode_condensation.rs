@@ -4,18 +4,14 @@
 //! inertia): which of the condensation's approximations moves the mesh mode.
 //!
 //!     cargo run --release --example mesh_mode_condensation -- out/KurokawaSpur.fmu [T1_Nm] [positions]
+#[path = "common/fmu_model.rs"]
+mod fmu_model;
 use gearfmu::dynamics::pmor::{linear, quasi_static::Condensation};
-use gearfmu::model_file::{ModelFile, ModelKind};
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let path = args.get(1).ok_or("usage: mesh_mode_condensation FMU [T1] [positions]")?;
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let mut archive = zip::ZipArchive::new(file).map_err(|e| e.to_string())?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut archive.by_name("resources/model.bin").map_err(|e| e.to_string())?, &mut bytes)
-        .map_err(|e| e.to_string())?;
-    let ModelKind::PmorHertz(model) = ModelFile::from_bytes(&bytes)?.model else { return Err("not PMOR-Hertz".into()) };
+    let model = fmu_model::pmor_model(path)?;
     let torque: f64 = args.get(2).map_or(Ok(model.pair.operating_torque_nm), |t| t.parse()).map_err(|_| "T1")?;
     let positions: usize = args.get(3).map_or(Ok(4), |t| t.parse()).map_err(|_| "positions")?;
     let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(&model.pair);

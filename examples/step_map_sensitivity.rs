@@ -8,8 +8,9 @@
 //! body mode that carries most of it.
 //!
 //!     cargo run --release --example step_map_sensitivity -- out/KurokawaSpur.fmu 6 [t_end_ms]
+#[path = "common/fmu_model.rs"]
+mod fmu_model;
 use gearfmu::dynamics::pmor::{quasi_static, PmorDynamics, PmorState};
-use gearfmu::model_file::{ModelFile, ModelKind};
 
 const COMM_STEP_S: f64 = 1e-4;
 const TORQUE_NM: f64 = 185.0;
@@ -36,12 +37,7 @@ fn main() -> Result<(), String> {
     let factor: f64 = args.get(2).map_or(Ok(6.0), |t| t.parse()).map_err(|_| "cutoff factor")?;
     let t_end_ms: f64 = args.get(3).map_or(Ok(16.0), |t| t.parse()).map_err(|_| "t_end_ms")?;
     let max_step_arg: Option<f64> = args.get(4).map(|t| t.parse()).transpose().map_err(|_| "max_step")?;
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let mut archive = zip::ZipArchive::new(file).map_err(|e| e.to_string())?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut archive.by_name("resources/model.bin").map_err(|e| e.to_string())?, &mut bytes)
-        .map_err(|e| e.to_string())?;
-    let ModelKind::PmorHertz(model) = ModelFile::from_bytes(&bytes)?.model else { return Err("not PMOR-Hertz".into()) };
+    let model = fmu_model::pmor_model(path)?;
     let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(&model.pair);
     let damping = model.damping(model.modal_damping_ratio, model.shape_damping_ratio);
     let mut d = PmorDynamics::new(&model, &place, damping, [0.0; 2]);
@@ -67,6 +63,10 @@ fn main() -> Result<(), String> {
         g[0].shapes,
         g[1].shapes
     );
+    for (i, gear) in g.iter().enumerate() {
+        let list: Vec<String> = gear.eigenvalues.iter().map(|&l| format!("{:.0}", hz(l))).collect();
+        println!("gear {} body modes (Hz): {}", i + 1, list.join(" "));
+    }
     println!(
         "one run: {wall_s:.3} s, {evaluations} contact evaluations, {solves} quasi-static solves ({:.1} / {:.1} per communication step)",
         evaluations as f64 / steps as f64,

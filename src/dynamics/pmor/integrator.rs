@@ -405,14 +405,8 @@ impl<'a> PmorDynamics<'a> {
             }
             let correction = newton.as_ref().map_or_else(|| residual.clone(), |p| p.solve(&residual));
             let shift: Vec<f64> = correction.iter().map(|c| -c).collect();
-            // The move's energy to first order, f̄·Δ, and the bodies' elastic energy of the move
-            // itself, ½ΔᵀKΔ (K = M·A): the first is blind to a body mode the forces barely load,
-            // and a stiff one is exactly what the explicit start leaves wrong (issue 38).
-            let body_move_j = 0.5 * dot(&shift, &mass((body_stiffness * &correction).as_slice()));
-            let energy_tolerance_j = DISCRETE_GRADIENT_ENERGY * elastic.abs() + 1e-20;
             if qs.last_solve_tight.get()
-                && dot(&f_bar, &shift).abs() <= energy_tolerance_j
-                && body_move_j <= energy_tolerance_j
+                && dot(&f_bar, &shift).abs() <= DISCRETE_GRADIENT_ENERGY * elastic.abs() + 1e-20
             {
                 converged = Some((next, end, dq));
                 break;
