@@ -326,7 +326,8 @@ pub(super) fn complement(u: &DVector<f64>) -> DMatrix<f64> {
 /// The condensation of both gears, and the fast coordinates of the last solve (the next
 /// Newton's start).
 pub struct QuasiStatic {
-    pub splits: [GearSplit; 2],
+    /// Shared: an FMU makes them once per inertia set and hands them to every doStep's dynamics.
+    pub splits: std::sync::Arc<[GearSplit; 2]>,
     pub(super) fast: RefCell<[Vec<f64>; 2]>,
     /// The last solve's linearization, the next solve's start where it exists (`Prediction`).
     pub(super) prediction: RefCell<Option<Prediction>>,
@@ -340,7 +341,7 @@ pub struct QuasiStatic {
     pub(super) at_predictor: std::cell::Cell<bool>,
     pub(super) last_solve_tight: std::cell::Cell<bool>,
     /// (h, (I + h²/4·A)⁻¹): the discrete-gradient iteration's matrix at the step it was made for.
-    pub(super) iteration_matrix: RefCell<Option<(f64, DMatrix<f64>)>>,
+    pub(super) iteration_matrix: RefCell<Option<(f64, std::rc::Rc<DMatrix<f64>>)>>,
     /// −∂a/∂q of the slow coordinates' bodies, assembled once (`discrete_gradient_matrix`).
     pub(super) body_acceleration_stiffness: std::cell::OnceCell<DMatrix<f64>>,
     /// The same bodies' modal damping as accelerations (`GearSplit::slow_body_damping`).
@@ -363,11 +364,11 @@ impl QuasiStatic {
             GearSplit::new(&dynamics_model.gears[0], added_inertia_kgm2[0], cutoff_hz)?,
             GearSplit::new(&dynamics_model.gears[1], added_inertia_kgm2[1], cutoff_hz)?,
         ];
-        Ok(Self::from_splits(dynamics_model, splits))
+        Ok(Self::from_splits(dynamics_model, std::sync::Arc::new(splits)))
     }
 
     /// From splits made before (`GearSplit::new` costs an eigen-decomposition per gear).
-    pub fn from_splits(dynamics_model: &super::model::PmorModel, splits: [GearSplit; 2]) -> Self {
+    pub fn from_splits(dynamics_model: &super::model::PmorModel, splits: std::sync::Arc<[GearSplit; 2]>) -> Self {
         let fast = [0, 1].map(|i| vec![0.0; splits[i].fast_size(dynamics_model.gears[i].shapes)]);
         QuasiStatic {
             splits,

@@ -169,14 +169,14 @@ const DISCRETE_GRADIENT_NOISE: f64 = 1e-6;
 /// Newton's matrix of a discrete-gradient step: the bodies' inverse, kept per step length, or
 /// the step's own factor with the mesh.
 enum NewtonMatrix {
-    Inverse(nalgebra::DMatrix<f64>),
+    Inverse(std::rc::Rc<nalgebra::DMatrix<f64>>),
     Factored(nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>),
 }
 
 impl NewtonMatrix {
     fn solve(&self, residual: &nalgebra::DVector<f64>) -> nalgebra::DVector<f64> {
         match self {
-            NewtonMatrix::Inverse(p) => p * residual,
+            NewtonMatrix::Inverse(p) => &**p * residual,
             // Invertible by construction (`discrete_gradient_matrix_with_mesh`).
             NewtonMatrix::Factored(lu) => lu.solve(residual).unwrap_or_else(|| residual.clone()),
         }
@@ -358,7 +358,7 @@ impl<'a> PmorDynamics<'a> {
                 q0[k] + h * v0[k] + 0.25 * h * h * (a0[k] + g1) + 0.5 * h * d_q0[k] + 0.25 * h * h * d_v0[k];
         }
         let q1 = match self.discrete_gradient_matrix(qs, h) {
-            Some(p) => p * predictor_rhs,
+            Some(p) => &*p * predictor_rhs,
             None => predictor_rhs,
         };
         for k in 0..n_q {
@@ -519,21 +519,33 @@ impl<'a> PmorDynamics<'a> {
     /// (`slow_body_acceleration_stiffness`, `slow_body_acceleration_damping`): the Jacobian of the
     /// trapezoid's positions, with q̇₁ = 2(q₁ − q₀)/h − q̇₀, frozen. Exact for the body modes,
     /// which are linear; where the teeth touch, each step replaces it with
-    /// `discrete_gradient_matrix_with_mesh` at its predictor. Made once per step length and kept.
+    /// `discrete_gradient_matrix_with_mesh` at its predictor. Made once per step length and kept (shared, not copied).
     fn discrete_gradient_matrix(
         &self,
         qs: &super::quasi_static::QuasiStatic,
         h: f64,
-    ) -> Option<nalgebra::DMatrix<f64>> {
+    ) -> Option<std::rc::Rc<nalgebra::DMatrix<f64>>> {
         if let Some((h_made, p)) = qs.iteration_matrix.borrow().as_ref() {
             if *h_made == h {
                 return Some(p.clone());
             }
         }
-        let a = self.slow_body_acceleration_stiffness(qs) * (0.25 * h * h)
-            + self.slow_body_acceleration_damping(qs) * (0.5 * h);
-        let n = a.nrows();
-        let p = (nalgebra::DMatrix::identity(n, n) + a).try_inverse()?;
+        // Block-diagonal: the angles' rows are the identity, and each gear's ξ block is its own
+        // (inverted per gear: a few times cheaper than the whole, and made once per call).
+        let l = self.layout();
+        let n = l.n_q[0] + l.n_q[1];
+        let mut p = nalgebra::DMatrix::identity(n, n);
+        for i in 0..2 {
+            let sp = &qs.splits[i];
+            let mut block = sp.slow_body_stiffness() * (0.25 * h * h)
+                + sp.slow_body_damping(self.damping[i].modes_ratio) * (0.5 * h);
+            for k in 0..block.nrows() {
+                block[(k, k)] += 1.0;
+            }
+            let q = l.q(i) + 1;
+            p.view_mut((q, q), (block.nrows(), block.ncols())).copy_from(&block.try_inverse()?);
+        }
+        let p = std::rc::Rc::new(p);
         *qs.iteration_matrix.borrow_mut() = Some((h, p.clone()));
         Some(p)
     }

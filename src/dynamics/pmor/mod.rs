@@ -210,7 +210,7 @@ impl<'a> PmorDynamics<'a> {
         place: &'a PairPlacement,
         damping: [Damping; 2],
         added_inertia_kgm2: [f64; 2],
-        splits: &[quasi_static::GearSplit; 2],
+        splits: &std::sync::Arc<[quasi_static::GearSplit; 2]>,
     ) -> Self {
         let mut d = PmorDynamics::new_without_condensation(model, place, damping, added_inertia_kgm2);
         d.quasi_static = Some(QuasiStatic::from_splits(model, splits.clone()));
