@@ -9,7 +9,9 @@ Evidence:
 - the run-up through the mesh resonance (PI-controlled motor, torsional shaft the master
   integrates, 20 and 100 µs coupling) completes on both FMUs, and both see the resonance (a DTE
   peak-to-peak above the quasi-static one) between 2.5 and 3.6 kHz, the lumped FMU's and the
-  PMOR-Hertz FMU's linearized mesh modes' range.
+  PMOR-Hertz FMU's linearized mesh modes' range;
+- the run-up's peak against the full-dynamics build of the same spec (every reduced coordinate
+  with its inertia, RK4, converged in its own step): the issue's 5 % and 2 %.
 """
 
 import math
@@ -111,3 +113,47 @@ def test_the_small_helical_pair_at_speed_completes_and_holds_the_brakes_balance_
             if not r["completed"] or abs(r["omega_2_error"]) >= 0.01:
                 failures.append((f, h, r.get("omega_2_error"), r["error"][:200]))
     assert not failures, failures
+
+
+@pytest.fixture(scope="module")
+def spur_full_reference(tmp_path_factory):
+    """Issue 38's reference: the same spec built with every reduced coordinate carrying its
+    inertia (`--dynamics full`, the paper's model) and integrated by RK4."""
+    from conftest import _fmu_build
+
+    path = tmp_path_factory.mktemp("spur_full") / "KurokawaSpurFull.fmu"
+    _fmu_build("build", "examples/kurokawa_spur.toml", "-o", str(path), "--dynamics", "full", "--integrator", "rk4")
+    fmu = Fmu(str(path), "spur_full")
+    yield fmu
+    fmu.close()
+
+
+# The reference's max_step: halved until the run-up's peak moved < 0.5 % (BENCHMARKS §12, at
+# 20 µs coupling: 41.67 / 41.88 / 41.90 µm at 2.7 / 1.35 / 0.675 µs); the test checks it again.
+REFERENCE_MAX_STEP_S = 1.35e-6
+
+
+def test_the_run_up_peak_is_the_full_models(spur_fmus, spur_full_reference):
+    """Issue 38's must-show, on the spur example at 20 µs coupling: the run-up through the mesh
+    resonance, the PMOR-Hertz FMU against the full-dynamics reference through the same loop — its
+    peak DTE peak-to-peak within 5 %, the mesh frequency of the peak within 2 % (independent
+    evidence: a model that keeps the inertia the default condenses, converged in its own step).
+
+    Not at 100 µs: there the peak of either model moves by ±5 % with the window of the ramp
+    alone (BENCHMARKS §12: −3.2 %, +5.6 %, +2.1 % against the reference for three windows), so a
+    5 % assertion would test the window, not the model."""
+    # 2.6 → 3.4 kHz in 0.111 s: issue 38's rate (0.4 → 4 kHz in 0.5 s) over the jump and the
+    # peak (3075–3125 Hz), the reference's cost kept to the window that decides.
+    common = dict(f_start_hz=2600.0, f_end_hz=3400.0, ramp_s=0.111, load_nm=185.0)
+    step_s = 20e-6
+    ref = run_up(spur_full_reference, step_s, parameters={"max_step": REFERENCE_MAX_STEP_S}, **common)
+    assert ref["completed"], ref["error"]
+    finer = run_up(spur_full_reference, step_s, parameters={"max_step": REFERENCE_MAX_STEP_S / 2}, **common)
+    assert finer["completed"], finer["error"]
+    assert abs(finer["peak_dte_pp_m"] / ref["peak_dte_pp_m"] - 1.0) < 0.005, (finer["peak_dte_pp_m"], ref["peak_dte_pp_m"])
+    r = run_up(spur_fmus["pmor"], step_s, **common)
+    assert r["completed"], r["error"]
+    print(f"\nrun-up at 20 µs: PMOR-Hertz {r['peak_dte_pp_m'] * 1e6:.2f} µm at {r['peak_frequency_hz']:.0f} Hz, "
+          f"reference {ref['peak_dte_pp_m'] * 1e6:.2f} µm at {ref['peak_frequency_hz']:.0f} Hz")
+    assert abs(r["peak_dte_pp_m"] / ref["peak_dte_pp_m"] - 1.0) < 0.05, (r["peak_dte_pp_m"], ref["peak_dte_pp_m"])
+    assert abs(r["peak_frequency_hz"] / ref["peak_frequency_hz"] - 1.0) < 0.02, (r["peak_frequency_hz"], ref["peak_frequency_hz"])
