@@ -105,6 +105,17 @@ pub(super) const PREDICTOR_RELATIVE_DECREMENT: f64 = 1e-2;
 pub(super) const STALL_ITERATIONS: usize = 6;
 pub(super) const STALL_RELATIVE_DECREMENT: f64 = 1e-4;
 
+/// How many (h, ζ) a split keeps its bodies' iteration block for: a run at constant speed uses
+/// one step length; a ramp moves through the few that its calls split into.
+const ITERATION_BLOCKS_KEPT: usize = 4;
+
+/// A kept iteration block: its key (h, ζ as bits) and the inverse.
+#[derive(Debug)]
+struct IterationBlock {
+    key: [u64; 2],
+    inverse: std::sync::Arc<DMatrix<f64>>,
+}
+
 /// One gear's split of η_Φ into the slow part Q·ξ and the fast part F·z_Φ: the hub direction b̂
 /// (where the bore is light) and the body modes above the cut-off.
 #[derive(Debug, Clone)]
@@ -142,6 +153,11 @@ pub struct GearSplit {
     /// gradient's Newton matrix reads them at every doStep.
     pub(super) slow_body_acceleration_stiffness: DMatrix<f64>,
     pub(super) slow_body_acceleration_damping_root: DMatrix<f64>,
+    /// (I + h/2·D_ξ + h²/4·A_ξ)⁻¹ for the last few (h, ζ) (`iteration_block`): shared by the
+    /// dynamics every doStep makes, so an FMU inverts it once per step length, not per call (it
+    /// was half of a doStep's overhead; issue 39). A pure function of its key: kept or made
+    /// again, the same matrix.
+    iteration_blocks: std::sync::Arc<std::sync::Mutex<Vec<IterationBlock>>>,
     /// The hub mode's free frequency (Hz) among the retained modes, the choice was made on.
     pub hub_frequency_hz: f64,
     /// The cut-off (Hz) and the body modes above it.
@@ -226,6 +242,7 @@ impl GearSplit {
         Ok(GearSplit {
             slow_body_acceleration_stiffness,
             slow_body_acceleration_damping_root,
+            iteration_blocks: Default::default(),
             hub,
             b,
             inertia_kgm2: inertia,
@@ -263,6 +280,26 @@ impl GearSplit {
     /// bodies.
     pub fn slow_body_damping(&self, ratio: f64) -> DMatrix<f64> {
         &self.slow_body_acceleration_damping_root * (2.0 * ratio)
+    }
+
+    /// (I + h/2·D_ξ + h²/4·A_ξ)⁻¹ at step h and modal damping ratio ζ: this gear's block of the
+    /// discrete gradient's Newton matrix for the bodies; `None` where it is singular.
+    pub(super) fn iteration_block(&self, h: f64, modal_ratio: f64) -> Option<std::sync::Arc<DMatrix<f64>>> {
+        let key = [h.to_bits(), modal_ratio.to_bits()];
+        let mut kept = self.iteration_blocks.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(block) = kept.iter().find(|b| b.key == key) {
+            return Some(block.inverse.clone());
+        }
+        let mut block = self.slow_body_stiffness() * (0.25 * h * h) + self.slow_body_damping(modal_ratio) * (0.5 * h);
+        for k in 0..block.nrows() {
+            block[(k, k)] += 1.0;
+        }
+        let inverse = std::sync::Arc::new(block.try_inverse()?);
+        if kept.len() >= ITERATION_BLOCKS_KEPT {
+            kept.remove(0);
+        }
+        kept.push(IterationBlock { key, inverse: inverse.clone() });
+        Some(inverse)
     }
 
     /// η += Q·ξ (n_k).

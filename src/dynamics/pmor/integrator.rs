@@ -531,19 +531,14 @@ impl<'a> PmorDynamics<'a> {
             }
         }
         // Block-diagonal: the angles' rows are the identity, and each gear's ξ block is its own
-        // (inverted per gear: a few times cheaper than the whole, and made once per call).
+        // (inverted per gear, a few times cheaper than the whole, and kept with the split).
         let l = self.layout();
         let n = l.n_q[0] + l.n_q[1];
         let mut p = nalgebra::DMatrix::identity(n, n);
         for i in 0..2 {
-            let sp = &qs.splits[i];
-            let mut block = sp.slow_body_stiffness() * (0.25 * h * h)
-                + sp.slow_body_damping(self.damping[i].modes_ratio) * (0.5 * h);
-            for k in 0..block.nrows() {
-                block[(k, k)] += 1.0;
-            }
+            let block = qs.splits[i].iteration_block(h, self.damping[i].modes_ratio)?;
             let q = l.q(i) + 1;
-            p.view_mut((q, q), (block.nrows(), block.ncols())).copy_from(&block.try_inverse()?);
+            p.view_mut((q, q), (block.nrows(), block.ncols())).copy_from(&*block);
         }
         let p = std::rc::Rc::new(p);
         *qs.iteration_matrix.borrow_mut() = Some((h, p.clone()));
