@@ -394,14 +394,16 @@ impl<'a> PmorDynamics<'a> {
                     + torques[1] * (e.outputs.bore_theta[1] - bore_before[1])
                     - 0.5 * decrement;
                 keep(shifted(&z, &dz, 1.0));
-                self.damp_the_shapes(qs, y, &mut e)?;
-                self.remember(qs, positions, torques, &mut e);
+                let slow_rows = self.slow_rows(qs, &e);
+                self.damp_the_shapes(qs, y, &mut e, &slow_rows)?;
+                self.remember(qs, positions, torques, &mut e, slow_rows);
                 return Ok(e);
             }
             if decrement.abs() <= NEWTON_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
                 keep(z);
-                self.damp_the_shapes(qs, y, &mut e)?;
-                self.remember(qs, positions, torques, &mut e);
+                let slow_rows = self.slow_rows(qs, &e);
+                self.damp_the_shapes(qs, y, &mut e, &slow_rows)?;
+                self.remember(qs, positions, torques, &mut e, slow_rows);
                 return Ok(e);
             }
             // The step, halved while the decrement (the residual's size in K⁻¹'s norm) does not
@@ -474,7 +476,13 @@ impl<'a> PmorDynamics<'a> {
     /// shapes' own: without it the mesh mode keeps only the body modes' share of damping
     /// (linearized ζ 0.05–0.09 % on the Kurokawa spur pair without a mesh damper, 0.32–0.41 %
     /// in the full pair; issue 38).
-    fn damp_the_shapes(&self, qs: &QuasiStatic, y: &[f64], e: &mut Evaluation) -> Result<(), String> {
+    fn damp_the_shapes(
+        &self,
+        qs: &QuasiStatic,
+        y: &[f64],
+        e: &mut Evaluation,
+        slow_rows: &[Vec<f64>],
+    ) -> Result<(), String> {
         if e.shape_damping.iter().all(|d| d.nrows() == 0) || e.outputs.contact.sections.is_empty() {
             return Ok(());
         }
@@ -482,12 +490,11 @@ impl<'a> PmorDynamics<'a> {
         let l = self.layout();
         let n_q = l.n_q[0] + l.n_q[1];
         let velocity = &y[n_q..2 * n_q];
-        let slow_rows = self.slow_rows(qs, e);
         let stiffness: Vec<f64> = e.outputs.contact.sections.iter().map(|s| s.stiffness_n_per_m).collect();
         let n_z0 = qs.fast.borrow()[0].len();
         let n_z = e.residual.len();
         let mut force = DVector::zeros(n_z);
-        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(&slow_rows) {
+        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(slow_rows) {
             let approach_rate: f64 = r.iter().zip(velocity).map(|(r, v)| r * v).sum();
             force.axpy(-k * approach_rate, g, 1.0);
         }
@@ -511,7 +518,7 @@ impl<'a> PmorDynamics<'a> {
         }
         let w = tangent.solve(&damping_force, &e.fast_rows, &stiffness)?;
         let mut on_slow = vec![0.0; n_q];
-        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(&slow_rows) {
+        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(slow_rows) {
             let share = k * g.dot(&w);
             on_slow.iter_mut().zip(r).for_each(|(f, r)| *f += share * r);
         }
@@ -620,8 +627,16 @@ impl<'a> PmorDynamics<'a> {
     }
 
     /// Keeps the solution's linearization for the next solve's start (`Prediction`).
-    fn remember(&self, qs: &QuasiStatic, positions: &[f64], torques: [f64; 2], e: &mut Evaluation) {
-        let slow_rows = self.slow_rows(qs, e);
+    /// The section rows in the slow coordinates come from the caller, who made them for
+    /// `damp_the_shapes` as well (once per solve).
+    fn remember(
+        &self,
+        qs: &QuasiStatic,
+        positions: &[f64],
+        torques: [f64; 2],
+        e: &mut Evaluation,
+        slow_rows: Vec<Vec<f64>>,
+    ) {
         let Some(tangent) = e.tangent.take() else { return };
         let sections = &e.outputs.contact.sections;
         *qs.prediction.borrow_mut() = Some(Prediction {
