@@ -377,8 +377,6 @@ pub struct QuasiStatic {
     /// (`PREDICTOR_RELATIVE_DECREMENT`), and whether the last solve met the step's own tolerance.
     pub(super) at_predictor: std::cell::Cell<bool>,
     pub(super) last_solve_tight: std::cell::Cell<bool>,
-    /// (h, (I + h²/4·A)⁻¹): the discrete-gradient iteration's matrix at the step it was made for.
-    pub(super) iteration_matrix: RefCell<Option<(f64, std::rc::Rc<DMatrix<f64>>)>>,
     /// −∂a/∂q of the slow coordinates' bodies, assembled once (`discrete_gradient_matrix`).
     pub(super) body_acceleration_stiffness: std::cell::OnceCell<DMatrix<f64>>,
     /// The same bodies' modal damping as accelerations (`GearSplit::slow_body_damping`).
@@ -415,7 +413,6 @@ impl QuasiStatic {
             stepping: Default::default(),
             at_predictor: Default::default(),
             last_solve_tight: Default::default(),
-            iteration_matrix: RefCell::new(None),
             body_acceleration_stiffness: std::cell::OnceCell::new(),
             body_acceleration_damping: std::cell::OnceCell::new(),
         }

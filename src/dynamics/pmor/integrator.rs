@@ -166,17 +166,37 @@ const DISCRETE_GRADIENT_ENERGY: f64 = 1e-7;
 /// solve stops at a Newton decrement of `quasi_static::STEP_RELATIVE_DECREMENT` (1e-6) of it.
 const DISCRETE_GRADIENT_NOISE: f64 = 1e-6;
 
-/// Newton's matrix of a discrete-gradient step: the bodies' inverse, kept per step length, or
-/// the step's own factor with the mesh.
+/// The bodies' (I + h/2·D + h²/4·A)⁻¹ on the slow coordinates: the identity on the angles (no
+/// body stiffness acts on them) and each gear's ξ block, kept with its split
+/// (`GearSplit::iteration_block`).
+struct BodyIteration {
+    blocks: [std::sync::Arc<nalgebra::DMatrix<f64>>; 2],
+    /// Where each gear's ξ block starts in the slow coordinates.
+    starts: [usize; 2],
+}
+
+impl BodyIteration {
+    fn apply(&self, x: &nalgebra::DVector<f64>) -> nalgebra::DVector<f64> {
+        let mut out = x.clone();
+        for (block, &start) in self.blocks.iter().zip(&self.starts) {
+            let n = block.nrows();
+            out.rows_mut(start, n).gemv(1.0, block, &x.rows(start, n), 0.0);
+        }
+        out
+    }
+}
+
+/// Newton's matrix of a discrete-gradient step: the bodies' alone, or the step's own factor
+/// with the mesh.
 enum NewtonMatrix {
-    Inverse(std::rc::Rc<nalgebra::DMatrix<f64>>),
+    Bodies(BodyIteration),
     Factored(nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>),
 }
 
 impl NewtonMatrix {
     fn solve(&self, residual: &nalgebra::DVector<f64>) -> nalgebra::DVector<f64> {
         match self {
-            NewtonMatrix::Inverse(p) => &**p * residual,
+            NewtonMatrix::Bodies(p) => p.apply(residual),
             // Invertible by construction (`discrete_gradient_matrix_with_mesh`).
             NewtonMatrix::Factored(lu) => lu.solve(residual).unwrap_or_else(|| residual.clone()),
         }
@@ -358,7 +378,7 @@ impl<'a> PmorDynamics<'a> {
                 q0[k] + h * v0[k] + 0.25 * h * h * (a0[k] + g1) + 0.5 * h * d_q0[k] + 0.25 * h * h * d_v0[k];
         }
         let q1 = match self.discrete_gradient_matrix(qs, h) {
-            Some(p) => &*p * predictor_rhs,
+            Some(p) => p.apply(&predictor_rhs),
             None => predictor_rhs,
         };
         for k in 0..n_q {
@@ -382,7 +402,7 @@ impl<'a> PmorDynamics<'a> {
                 newton = self
                     .discrete_gradient_matrix_with_mesh(qs, h)
                     .map(NewtonMatrix::Factored)
-                    .or_else(|| self.discrete_gradient_matrix(qs, h).map(NewtonMatrix::Inverse));
+                    .or_else(|| self.discrete_gradient_matrix(qs, h).map(NewtonMatrix::Bodies));
             }
             let m_a1 = mass(&next[n_q..2 * n_q]);
             let dq: Vec<f64> = (0..n_q).map(|k| trial[k] - q0[k]).collect();
@@ -519,30 +539,12 @@ impl<'a> PmorDynamics<'a> {
     /// (`slow_body_acceleration_stiffness`, `slow_body_acceleration_damping`): the Jacobian of the
     /// trapezoid's positions, with q̇₁ = 2(q₁ − q₀)/h − q̇₀, frozen. Exact for the body modes,
     /// which are linear; where the teeth touch, each step replaces it with
-    /// `discrete_gradient_matrix_with_mesh` at its predictor. Made once per step length and kept (shared, not copied).
-    fn discrete_gradient_matrix(
-        &self,
-        qs: &super::quasi_static::QuasiStatic,
-        h: f64,
-    ) -> Option<std::rc::Rc<nalgebra::DMatrix<f64>>> {
-        if let Some((h_made, p)) = qs.iteration_matrix.borrow().as_ref() {
-            if *h_made == h {
-                return Some(p.clone());
-            }
-        }
-        // Block-diagonal: the angles' rows are the identity, and each gear's ξ block is its own
-        // (inverted per gear, a few times cheaper than the whole, and kept with the split).
+    /// `discrete_gradient_matrix_with_mesh` at its predictor. Block-diagonal, each gear's block
+    /// inverted once per step length and kept with its split (`GearSplit::iteration_block`).
+    fn discrete_gradient_matrix(&self, qs: &super::quasi_static::QuasiStatic, h: f64) -> Option<BodyIteration> {
         let l = self.layout();
-        let n = l.n_q[0] + l.n_q[1];
-        let mut p = nalgebra::DMatrix::identity(n, n);
-        for i in 0..2 {
-            let block = qs.splits[i].iteration_block(h, self.damping[i].modes_ratio)?;
-            let q = l.q(i) + 1;
-            p.view_mut((q, q), (block.nrows(), block.ncols())).copy_from(&*block);
-        }
-        let p = std::rc::Rc::new(p);
-        *qs.iteration_matrix.borrow_mut() = Some((h, p.clone()));
-        Some(p)
+        let block = |i: usize| qs.splits[i].iteration_block(h, self.damping[i].modes_ratio);
+        Some(BodyIteration { blocks: [block(0)?, block(1)?], starts: [l.q(0) + 1, l.q(1) + 1] })
     }
 }
 
