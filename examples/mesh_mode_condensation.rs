@@ -27,6 +27,8 @@ fn main() -> Result<(), String> {
         ("full (every coordinate with inertia)", Condensation::None, None),
     ];
     let mesh_mode_hz = gearfmu::dynamics::pmor::quasi_static::mesh_mode_estimate_hz(&model);
+    // Each build calibrates its own gain on its own treatment: every row here takes this FMU's.
+    println!("mesh damper gain g = {:.3} (this FMU's build), mesh damping ratio {zeta}", model.mesh_damper_gain);
     for (label, condensation, cutoff) in cases {
         let mut d = gearfmu::dynamics::pmor::PmorDynamics::new(&model, &place, damping, [0.0; 2]);
         d.set_condensation(condensation);

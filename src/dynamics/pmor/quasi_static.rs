@@ -37,7 +37,7 @@
 //! Damping acts on the slow coordinates only: the modal damping of Φ on η̇_Φ = Q·ξ̇, the mesh
 //! damper on the approach rate the slow motion makes, and the shapes' damping D_Ψ on the rate the
 //! quasi-static shapes follow the slow motion with, carried onto it through the equilibrium's
-//! tangent (`damp_the_shapes`; issue 38: without it the mesh mode lost the full pair's shape
+//! tangent (`damp_the_fast_motion`; issue 38: without it the mesh mode lost the full pair's shape
 //! damping, and with it the run-up through the resonance that of the full pair).
 //!
 //! The hub direction is condensed only where its free frequency (the pencil (Λ, M_ΦΦ − bbᵀ/J) on
@@ -70,6 +70,10 @@ struct Evaluation {
     dissipation_w: f64,
     /// Per gear, the shapes' damping D_Ψ(ϑ) at this pose (n_t × n_t; empty where undamped).
     shape_damping: [DMatrix<f64>; 2],
+    /// The bodies' damping forces (modal and the mesh damper, from the slow motion's rates; the
+    /// sign of D·q̇) in the fast body coordinates z_Φ, zero on η_Ψ: what the slow projection
+    /// leaves, carried onto the slow motion through the equilibrium (`damp_the_fast_motion`).
+    fast_damping: DVector<f64>,
     outputs: PmorOutputs,
 }
 
@@ -93,14 +97,21 @@ impl<'a> PmorDynamics<'a> {
                 eta_phi[j] += f * z_c;
             }
         }
-        let dot_b = |v: &[f64]| sp.b.iter().zip(v).map(|(b, v)| b * v).sum::<f64>();
-        let theta = y[l.q(i)] - dot_b(&eta_phi) / sp.inertia_kgm2;
-        let mut velocity = vec![0.0; 1 + n_k];
-        sp.add_slow(&y[l.v(i) + 1..l.v(i) + 1 + n_x], &mut velocity[1..]);
-        velocity[0] = y[l.v(i)] - dot_b(&velocity[1..]) / sp.inertia_kgm2;
+        let theta = y[l.q(i)] - sp.b.iter().zip(&eta_phi).map(|(b, e)| b * e).sum::<f64>() / sp.inertia_kgm2;
         let mut eta = eta_phi;
         eta.extend_from_slice(&z[n_f..]);
-        (eta, theta, velocity)
+        (eta, theta, self.slow_body_velocity(qs, l, y, i))
+    }
+
+    /// Gear i's (θ̇, η̇_Φ) of the slow motion alone (the fast coordinates held): η̇_Φ = Q·ξ̇,
+    /// θ̇ = φ̇ − bᵀη̇_Φ/J.
+    fn slow_body_velocity(&self, qs: &QuasiStatic, l: &Layout, y: &[f64], i: usize) -> Vec<f64> {
+        let sp = &qs.splits[i];
+        let n_x = sp.slow_size();
+        let mut velocity = vec![0.0; 1 + self.model.gears[i].modes()];
+        sp.add_slow(&y[l.v(i) + 1..l.v(i) + 1 + n_x], &mut velocity[1..]);
+        velocity[0] = y[l.v(i)] - sp.b.iter().zip(&velocity[1..]).map(|(b, v)| b * v).sum::<f64>() / sp.inertia_kgm2;
+        velocity
     }
 
     /// The forces with the slow state y and the fast coordinates z.
@@ -147,6 +158,7 @@ impl<'a> PmorDynamics<'a> {
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
         let mut dissipation = contact.damper_power_w;
         let mut shape_damping = [DMatrix::zeros(0, 0), DMatrix::zeros(0, 0)];
+        let mut fast_damping = DVector::zeros(n_z[0] + n_z[1]);
         for i in 0..2 {
             let g = &model.gears[i];
             let sp = &qs.splits[i];
@@ -196,6 +208,7 @@ impl<'a> PmorDynamics<'a> {
             let n_f = sp.fast_body_size();
             for c in 0..n_f {
                 residual[r + c] = sp.fast_dot(c, f_phi.as_slice()) - sp.bore_turn[c] * f_theta;
+                fast_damping[r + c] = sp.fast_dot(c, d_phi.as_slice()) - sp.bore_turn[c] * d_theta;
             }
             r += n_f;
             for m in 0..n_t {
@@ -250,6 +263,7 @@ impl<'a> PmorDynamics<'a> {
             acceleration,
             dissipation_w: dissipation,
             shape_damping,
+            fast_damping,
             outputs: out,
         })
     }
@@ -395,14 +409,14 @@ impl<'a> PmorDynamics<'a> {
                     - 0.5 * decrement;
                 keep(shifted(&z, &dz, 1.0));
                 let slow_rows = self.slow_rows(qs, &e);
-                self.damp_the_shapes(qs, y, &mut e, &slow_rows)?;
+                self.damp_the_fast_motion(qs, y, &mut e, &slow_rows)?;
                 self.remember(qs, positions, torques, &mut e, slow_rows);
                 return Ok(e);
             }
             if decrement.abs() <= NEWTON_RELATIVE_DECREMENT * potential + NEWTON_FLOOR_J {
                 keep(z);
                 let slow_rows = self.slow_rows(qs, &e);
-                self.damp_the_shapes(qs, y, &mut e, &slow_rows)?;
+                self.damp_the_fast_motion(qs, y, &mut e, &slow_rows)?;
                 self.remember(qs, positions, torques, &mut e, slow_rows);
                 return Ok(e);
             }
@@ -467,23 +481,37 @@ impl<'a> PmorDynamics<'a> {
             .collect()
     }
 
-    /// The contact shapes' damping carried onto the slow motion. The shapes are quasi-static, so
-    /// their rate follows the slow velocity v through the equilibrium (the implicit function
-    /// theorem, as `Prediction`): K·ż = −Σ_s k_s·g_s·(r_s·v), and the damping force −D_Ψ·ż they
-    /// feel acts on the slow coordinates by virtual work through the same tangent:
-    /// f = (∂z/∂y)ᵀ(−D_Ψ·ż) = Σ_s r_s·k_s·g_s·K⁻¹·D_Ψ·ż, which dissipates żᵀD_Ψż ≥ 0. This is the full
-    /// pair's shape damping (the build's `shape_damping_ratio`) at frequencies far below the
-    /// shapes' own: without it the mesh mode keeps only the body modes' share of damping
+    /// The damping of the fast coordinates' motion, carried onto the slow motion. The fast
+    /// coordinates are quasi-static, so their rate follows the slow velocity v through the
+    /// equilibrium (the implicit function theorem, as `Prediction`): K·ż = −Σ_s k_s·g_s·(r_s·v).
+    /// Two dampings see that rate in the full pair:
+    ///
+    /// - **the shapes' D_Ψ** (the build's `shape_damping_ratio`) on η̇_Ψ;
+    /// - **the bodies' damping** — the condensed body modes' modal damping and the mesh damper,
+    ///   whose approach rate is made of θ̇ and every η̇_Φ, the condensed modes' too: with
+    ///   η̇_Φ = Q·ξ̇ + F·ż_Φ and θ̇ = φ̇ − bᵀη̇_Φ/J. `evaluate` damps the slow rates alone; here
+    ///   the fast rates' share is added (the mesh damper per section recomputed with the whole
+    ///   rate, still never pulling).
+    ///
+    /// A damping force d (the sign of D·q̇) acts on the slow coordinates by virtual work: its
+    /// slow projection directly, its fast projection through the same tangent,
+    /// f = −(∂z/∂y)ᵀd_z = Σ_s r_s·k_s·g_s·K⁻¹·d_z. So the power taken is the damping's own, ≥ 0.
+    /// Issue 38: without the shapes' damping the mesh mode kept only the body modes' share
     /// (linearized ζ 0.05–0.09 % on the Kurokawa spur pair without a mesh damper, 0.32–0.41 %
-    /// in the full pair; issue 38).
-    fn damp_the_shapes(
+    /// in the full pair); without the condensed modes' rate the mesh damper saw a larger
+    /// approach rate than the full pair's and damped the mesh mode 20 % more at the same c
+    /// (small helical pair), 2 × more at the 3 × cut-off.
+    fn damp_the_fast_motion(
         &self,
         qs: &QuasiStatic,
         y: &[f64],
         e: &mut Evaluation,
         slow_rows: &[Vec<f64>],
     ) -> Result<(), String> {
-        if e.shape_damping.iter().all(|d| d.nrows() == 0) || e.outputs.contact.sections.is_empty() {
+        let shapes_damped = e.shape_damping.iter().any(|d| d.nrows() > 0);
+        let bodies_damped = self.mesh_damping_n_s_per_m > 0.0 || self.damping.iter().any(|d| d.modes_ratio > 0.0);
+        let fast_bodies = qs.splits.iter().any(|sp| sp.fast_body_size() > 0);
+        if !(shapes_damped || (bodies_damped && fast_bodies)) || e.outputs.contact.sections.is_empty() {
             return Ok(());
         }
         let Some(tangent) = e.tangent.as_ref() else { return Ok(()) };
@@ -499,9 +527,11 @@ impl<'a> PmorDynamics<'a> {
             force.axpy(-k * approach_rate, g, 1.0);
         }
         let rate = tangent.solve(&force, &e.fast_rows, &stiffness)?;
-        // D_Ψ·ż on each gear's shape block (the last n_t of its fast coordinates).
-        let mut damping_force = DVector::zeros(n_z);
+        // The damping forces on the fast coordinates (the sign of D·q̇): the bodies' from the
+        // slow rates, then what follows.
+        let mut damping_force = e.fast_damping.clone();
         let mut power = 0.0;
+        // The shapes: D_Ψ·ż on each gear's shape block (the last n_t of its fast coordinates).
         for i in 0..2 {
             let d = &e.shape_damping[i];
             let n_t = d.nrows();
@@ -512,12 +542,77 @@ impl<'a> PmorDynamics<'a> {
             let start = end - n_t;
             for a in 0..n_t {
                 let f: f64 = (0..n_t).map(|b| d[(a, b)] * rate[start + b]).sum();
-                damping_force[start + a] = f;
+                damping_force[start + a] += f;
                 power += rate[start + a] * f;
             }
         }
-        let w = tangent.solve(&damping_force, &e.fast_rows, &stiffness)?;
+        // The bodies: the fast rates' share of (θ̇, η̇_Φ) per gear, and the damping it adds there.
         let mut on_slow = vec![0.0; n_q];
+        if bodies_damped && fast_bodies {
+            let mut fast_velocity: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+            let mut body_force: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+            for i in 0..2 {
+                let (sp, g) = (&qs.splits[i], &self.model.gears[i]);
+                let z_off = if i == 0 { 0 } else { n_z0 };
+                let mut v = vec![0.0; 1 + g.modes()];
+                for c in 0..sp.fast_body_size() {
+                    for &(j, f) in &sp.fast_columns[c] {
+                        v[1 + j] += f * rate[z_off + c];
+                    }
+                    v[0] -= sp.bore_turn[c] * rate[z_off + c];
+                }
+                // Modal damping is linear in η̇_Φ: its increment is D_Φ·(F·ż_Φ).
+                let slow = self.slow_body_velocity(qs, &l, y, i);
+                let mut f = vec![0.0; 1 + g.modes()];
+                for j in 0..g.modes() {
+                    let d = 2.0 * self.damping[i].modes_ratio * g.eigenvalues[j].sqrt();
+                    f[1 + j] = d * v[1 + j];
+                    power += d * v[1 + j] * (2.0 * slow[1 + j] + v[1 + j]);
+                }
+                fast_velocity[i] = v;
+                body_force[i] = f;
+            }
+            // The mesh damper, per section, with the whole approach rate (`contact::apply_mesh_damper`).
+            let total_stiffness: f64 = stiffness.iter().sum();
+            if self.mesh_damping_n_s_per_m > 0.0 && total_stiffness > 0.0 {
+                let slow_velocity = [self.slow_body_velocity(qs, &l, y, 0), self.slow_body_velocity(qs, &l, y, 1)];
+                let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
+                for section in e.outputs.contact.sections.iter() {
+                    let c = self.mesh_damping_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
+                    let along = |v: &[Vec<f64>; 2]| -> f64 {
+                        (0..2).map(|i| section.rows[i][..n_body[i]].iter().zip(&v[i]).map(|(r, v)| r * v).sum::<f64>()).sum()
+                    };
+                    let (slow_rate, fast_rate) = (along(&slow_velocity), along(&fast_velocity));
+                    let before = (c * slow_rate).max(-section.force_n);
+                    let after = (c * (slow_rate + fast_rate)).max(-section.force_n);
+                    let added = after - before;
+                    power += after * (slow_rate + fast_rate) - before * slow_rate;
+                    e.outputs.contact.damper_force_n += section.flank_sign * added;
+                    for i in 0..2 {
+                        for (f, r) in body_force[i].iter_mut().zip(&section.rows[i][..n_body[i]]) {
+                            *f += added * r;
+                        }
+                    }
+                }
+            }
+            // Each gear's added body force: on the slow coordinates directly, on the fast ones
+            // to be carried below.
+            for i in 0..2 {
+                let sp = &qs.splits[i];
+                let z_off = if i == 0 { 0 } else { n_z0 };
+                let (f_theta, f_phi) = (body_force[i][0], &body_force[i][1..]);
+                let q = l.q(i);
+                on_slow[q] -= f_theta;
+                let on_xi = sp.force_on_slow(f_theta, f_phi);
+                for (o, f) in on_slow[q + 1..q + l.n_q[i]].iter_mut().zip(on_xi.iter()) {
+                    *o -= f;
+                }
+                for c in 0..sp.fast_body_size() {
+                    damping_force[z_off + c] += sp.fast_dot(c, f_phi) - sp.bore_turn[c] * f_theta;
+                }
+            }
+        }
+        let w = tangent.solve(&damping_force, &e.fast_rows, &stiffness)?;
         for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(slow_rows) {
             let share = k * g.dot(&w);
             on_slow.iter_mut().zip(r).for_each(|(f, r)| *f += share * r);
@@ -628,7 +723,7 @@ impl<'a> PmorDynamics<'a> {
 
     /// Keeps the solution's linearization for the next solve's start (`Prediction`).
     /// The section rows in the slow coordinates come from the caller, who made them for
-    /// `damp_the_shapes` as well (once per solve).
+    /// `damp_the_fast_motion` as well (once per solve).
     fn remember(
         &self,
         qs: &QuasiStatic,
