@@ -7,7 +7,7 @@ at its default max_step and at halved steps until its DTE peak moves by < 0.5 %,
 peak DTE peak-to-peak and its mesh frequency are reported against the converged reference.
 
     .venv/bin/python scripts/at_speed_runup.py out/KurokawaSpur.fmu out/KurokawaSpurLumped.fmu \\
-        --reference out/KurokawaSpurFull.fmu --load-nm 185 --steps-us 20,100
+        --reference out/KurokawaSpurFull.fmu --load-nm 185 --steps-us 20,100 [--param mesh_damping_ratio=0]
 """
 
 import argparse
@@ -27,8 +27,11 @@ def main() -> int:
     p.add_argument("--f-start-hz", type=float, default=400.0)
     p.add_argument("--f-end-hz", type=float, default=4000.0)
     p.add_argument("--ramp-s", type=float, default=0.5)
+    p.add_argument("--param", action="append", default=[], help="NAME=VALUE: an FMU parameter for every run "
+                   "(e.g. mesh_damping_ratio=0)")
     p.add_argument("--json", help="write every result here")
     args = p.parse_args()
+    params = dict((k, float(v)) for k, v in (kv.split("=") for kv in args.param))
     steps = [float(x) * 1e-6 for x in args.steps_us.split(",")]
     common = dict(f_start_hz=args.f_start_hz, f_end_hz=args.f_end_hz, ramp_s=args.ramp_s, load_nm=args.load_nm)
     results, bad = [], 0
@@ -50,7 +53,7 @@ def main() -> int:
             max_step = fmu.start["max_step"]
             previous = None
             while True:
-                r = run_up(fmu, h, parameters={"max_step": max_step}, **common)
+                r = run_up(fmu, h, parameters={**params, "max_step": max_step}, **common)
                 r.update(fmu=args.reference, max_step_s=max_step)
                 show(f"reference, max_step {max_step * 1e6:.3g} µs", r)
                 results.append(r)
@@ -64,7 +67,7 @@ def main() -> int:
             fmu.close()
         for path in args.fmus:
             fmu = Fmu(path)
-            r = run_up(fmu, h, **common)
+            r = run_up(fmu, h, parameters=dict(params), **common)
             r.update(fmu=path)
             if ref and r["completed"]:
                 r["peak_pp_error"] = r["peak_dte_pp_m"] / ref["peak_dte_pp_m"] - 1

@@ -580,7 +580,9 @@ impl<'a> PmorDynamics<'a> {
                 for section in e.outputs.contact.sections.iter() {
                     let c = self.mesh_damping_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
                     let along = |v: &[Vec<f64>; 2]| -> f64 {
-                        (0..2).map(|i| section.rows[i][..n_body[i]].iter().zip(&v[i]).map(|(r, v)| r * v).sum::<f64>()).sum()
+                        (0..2)
+                            .map(|i| section.rows[i][..n_body[i]].iter().zip(&v[i]).map(|(r, v)| r * v).sum::<f64>())
+                            .sum()
                     };
                     let (slow_rate, fast_rate) = (along(&slow_velocity), along(&fast_velocity));
                     let before = (c * slow_rate).max(-section.force_n);
