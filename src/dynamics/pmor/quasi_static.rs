@@ -34,11 +34,13 @@
 //! contact's nonlinearity the energy-conserving integrator's soak showed it creating 3e-5 of
 //! the energy in play at a load reversal.)
 //!
-//! Damping acts on the slow coordinates only: the modal damping of Φ on η̇_Φ = Q·ξ̇, the mesh
-//! damper on the approach rate the slow motion makes, and the shapes' damping D_Ψ on the rate the
-//! quasi-static shapes follow the slow motion with, carried onto it through the equilibrium's
-//! tangent (`damp_the_fast_motion`; issue 38: without it the mesh mode lost the full pair's shape
-//! damping, and with it the run-up through the resonance that of the full pair).
+//! Damping acts as in the full pair, on every coordinate's rate: the fast coordinates have no
+//! velocity of their own, but they follow the slow motion through their equilibrium, so their
+//! rate is ż = (∂z/∂y)·ẏ. The modal damping of Φ and the mesh damper see η̇_Φ = Q·ξ̇ + F·ż_Φ, the
+//! shapes' damping D_Ψ sees η̇_Ψ, and what they load the fast coordinates with is carried onto
+//! the slow motion through the equilibrium's tangent (`damp_the_fast_motion`; issue 38: without
+//! the shapes' rate the mesh mode lost the full pair's shape damping, without the condensed body
+//! modes' rate the mesh damper damped it 8–20 % more than in the full pair at the same c).
 //!
 //! The hub direction is condensed only where its free frequency (the pencil (Λ, M_ΦΦ − bbᵀ/J) on
 //! the retained modes) lies above the cut-off: a bore given a shaft's inertia (`inertia_i` above
