@@ -947,7 +947,7 @@ fn contact_beyond_the_half_width_rule_is_an_error() {
 /// (the build calibrates at ζ = 0.05 under the reference mesh force). Per position the ratio follows the contact zone, as any viscous mesh damper's does:
 /// higher in single contact, where the mesh is softer (measured +33 %), lower in double
 /// (−15 %). The damper acts on the loaded sections' approach velocity, so without the build's
-/// gain (`PmorModel::mesh_damper_gain`, 2.0 here) it would give about half the ratio: the teeth's
+/// gain (`PmorModel::mesh_damper_gain`, about 2.1 here) it would give about half the ratio: the teeth's
 /// own bending, which it leaves out, carries the rest of the mesh mode's relative motion.
 #[test]
 fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
