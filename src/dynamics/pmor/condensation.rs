@@ -313,13 +313,22 @@ impl GearSplit {
 
     /// Qᵀ(f_Φ − b·f_θ/J): a force on (θ, η_Φ) on ξ.
     pub(super) fn force_on_slow(&self, f_theta: f64, f_phi: &[f64]) -> DVector<f64> {
+        let mut out = DVector::zeros(self.slow_columns.len());
+        self.force_on_slow_into(f_theta, f_phi, out.as_mut_slice());
+        out
+    }
+
+    /// `force_on_slow` written into `out` (n_ξ): the step path's form, no allocation.
+    pub(super) fn force_on_slow_into(&self, f_theta: f64, f_phi: &[f64], out: &mut [f64]) {
         let per_theta = f_theta / self.inertia_kgm2;
-        DVector::from_iterator(
-            self.slow_columns.len(),
-            self.slow_columns
-                .iter()
-                .map(|column| column.iter().map(|&(j, q)| q * (f_phi[j] - self.b[j] * per_theta)).sum()),
-        )
+        let b = self.b.as_slice();
+        for (o, column) in out.iter_mut().zip(&self.slow_columns) {
+            let mut sum = 0.0;
+            for &(j, q) in column {
+                sum += q * (f_phi[j] - b[j] * per_theta);
+            }
+            *o = sum;
+        }
     }
 
     /// ξ̈ = M_ξ⁻¹·f_ξ, in place.

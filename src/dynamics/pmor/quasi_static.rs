@@ -475,8 +475,7 @@ impl<'a> PmorDynamics<'a> {
                     let rows = &section.rows[i];
                     let q = l.q(i);
                     row[q] = rows[0];
-                    let on_xi = qs.splits[i].force_on_slow(rows[0], &rows[1..1 + n_k]);
-                    row[q + 1..q + l.n_q[i]].copy_from_slice(on_xi.as_slice());
+                    qs.splits[i].force_on_slow_into(rows[0], &rows[1..1 + n_k], &mut row[q + 1..q + l.n_q[i]]);
                 }
                 row
             })
@@ -551,6 +550,7 @@ impl<'a> PmorDynamics<'a> {
         // The bodies: the fast rates' share of (θ̇, η̇_Φ) per gear, and the damping it adds there.
         let mut on_slow = vec![0.0; n_q];
         if bodies_damped && fast_bodies {
+            let slow_velocity = [self.slow_body_velocity(qs, &l, y, 0), self.slow_body_velocity(qs, &l, y, 1)];
             let mut fast_velocity: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
             let mut body_force: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
             for i in 0..2 {
@@ -564,7 +564,7 @@ impl<'a> PmorDynamics<'a> {
                     v[0] -= sp.bore_turn[c] * rate[z_off + c];
                 }
                 // Modal damping is linear in η̇_Φ: its increment is D_Φ·(F·ż_Φ).
-                let slow = self.slow_body_velocity(qs, &l, y, i);
+                let slow = &slow_velocity[i];
                 let mut f = vec![0.0; 1 + g.modes()];
                 for j in 0..g.modes() {
                     let d = 2.0 * self.damping[i].modes_ratio * g.eigenvalues[j].sqrt();
@@ -577,7 +577,6 @@ impl<'a> PmorDynamics<'a> {
             // The mesh damper, per section, with the whole approach rate (`contact::apply_mesh_damper`).
             let total_stiffness: f64 = stiffness.iter().sum();
             if self.mesh_damping_n_s_per_m > 0.0 && total_stiffness > 0.0 {
-                let slow_velocity = [self.slow_body_velocity(qs, &l, y, 0), self.slow_body_velocity(qs, &l, y, 1)];
                 let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
                 for section in e.outputs.contact.sections.iter() {
                     let c = self.mesh_damping_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
@@ -661,23 +660,13 @@ impl<'a> PmorDynamics<'a> {
             .map(|g| p.tangent.solve(g, &p.fast_rows, &p.stiffness))
             .collect::<Result<_, _>>()
             .ok()?;
-        let mut a = DMatrix::zeros(n_q, n_q);
-        for (s, (r_s, k_s)) in p.slow_rows.iter().zip(&p.stiffness).enumerate() {
-            // Row s of the Schur complement's coupling: k_s·r_s·(r_s − Σ_t k_t (g_sᵀw_t) r_t)ᵀ.
-            let mut column = DVector::from_column_slice(r_s);
-            for (t, (r_t, k_t)) in p.slow_rows.iter().zip(&p.stiffness).enumerate() {
-                let c = k_t * p.fast_rows[s].dot(&w[t]);
-                column.iter_mut().zip(r_t).for_each(|(x, r)| *x -= c * r);
-            }
-            for i in 0..n_q {
-                let f = k_s * r_s[i];
-                if f != 0.0 {
-                    for j in 0..n_q {
-                        a[(i, j)] += f * column[j];
-                    }
-                }
-            }
-        }
+        // With R the sections' slow rows (S × n_q), k their stiffnesses and C_st = g_sᵀw_t:
+        // A_c = (kR)ᵀ·(R − C·(kR)), two dense products.
+        let n_s = p.slow_rows.len();
+        let r = DMatrix::from_fn(n_s, n_q, |s, j| p.slow_rows[s][j]);
+        let kr = DMatrix::from_fn(n_s, n_q, |s, j| p.stiffness[s] * r[(s, j)]);
+        let c = DMatrix::from_fn(n_s, n_s, |s, t| p.fast_rows[s].dot(&w[t]));
+        let mut a = kr.transpose() * (&r - c * &kr);
         self.slow_accelerations(qs, &mut a);
         a.iter().all(|x| x.is_finite()).then_some(a)
     }
@@ -709,18 +698,14 @@ impl<'a> PmorDynamics<'a> {
     /// M⁻¹ on the rows of a force matrix of the slow coordinates: per gear θ by J, ξ by M_ξ.
     fn slow_accelerations(&self, qs: &QuasiStatic, a: &mut DMatrix<f64>) {
         let l = self.layout();
-        let n_q = l.n_q[0] + l.n_q[1];
         for i in 0..2 {
             let sp = &qs.splits[i];
             let q = l.q(i);
             let n = l.n_q[i];
-            for j in 0..n_q {
-                a[(q, j)] /= sp.inertia_kgm2;
-                let mut xi = DVector::from_iterator(n - 1, (1..n).map(|r| a[(q + r, j)]));
-                sp.xi_acceleration(&mut xi);
-                for r in 1..n {
-                    a[(q + r, j)] = xi[r - 1];
-                }
+            a.row_mut(q).scale_mut(1.0 / sp.inertia_kgm2);
+            if !sp.xi_mass_is_unit {
+                let mut block = a.rows_mut(q + 1, n - 1);
+                sp.xi_mass_factor.solve_mut(&mut block);
             }
         }
     }
