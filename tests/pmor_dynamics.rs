@@ -1001,7 +1001,7 @@ fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
 /// their equilibrium, and the mesh damper's approach rate and the modal damping see that rate
 /// (`damp_the_fast_motion`). Without the condensed body modes' rate the damper saw a larger
 /// approach rate than the full pair's: at the same c the default's ζ was 8 % above the full
-/// pair's here (20 % on the small helical pair, 2 × at the explicit integrator's 3 × cut-off),
+/// pair's here (20 % on the small helical pair, 1.7–2.1 × at the explicit integrator's 3 × cut-off),
 /// and each build's own calibration of c then made the two FMUs of one spec different pairs
 /// (issue 38). Measured 2026-11-28: within 0.1 % per position at the default cut-off, +7 % at 3 ×
 /// (its mesh mode 1.4 % stiffer).

@@ -501,7 +501,7 @@ impl<'a> PmorDynamics<'a> {
     /// (linearized ζ 0.05–0.09 % on the Kurokawa spur pair without a mesh damper, 0.32–0.41 %
     /// in the full pair); without the condensed modes' rate the mesh damper saw a larger
     /// approach rate than the full pair's and damped the mesh mode 20 % more at the same c
-    /// (small helical pair), 2 × more at the 3 × cut-off.
+    /// (small helical pair), 1.7–2.1 × more at the 3 × cut-off.
     fn damp_the_fast_motion(
         &self,
         qs: &QuasiStatic,
