@@ -139,9 +139,11 @@ pub struct GearSplit {
     pub(super) fast_stiffness: DVector<f64>,
     /// Q (n_k × n_ξ): orthonormal columns, the complement of F.
     pub basis: DMatrix<f64>,
-    /// Q's nonzero entries (row, value) per column: Q is the identity on the retained modes but
-    /// for the Householder block of b̂'s few modes, so the step path reads it in O(n_k).
-    pub(super) slow_columns: Vec<Vec<(usize, f64)>>,
+    /// Q in the form the step path applies: on the retained modes (their indices in η_Φ), the
+    /// last n_l − 1 columns of the Householder reflection H = I − s·vvᵀ that takes e₁ to b̂
+    /// (`complement`), or the identity where the hub stays. b̂ has an entry on every retained
+    /// mode that turns the bore, so Q is dense there; in this form Q·ξ and Qᵀf cost O(n_l).
+    slow_map: SlowMap,
     /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
     pub xi_mass: DMatrix<f64>,
     pub(super) xi_mass_factor: nalgebra::Cholesky<f64, nalgebra::Dyn>,
@@ -221,7 +223,14 @@ impl GearSplit {
         let fast_stiffness = (fast_basis.transpose() * &lambda * &fast_basis).diagonal();
         let bore_turn = fast_basis.transpose() * &b / inertia;
         let fast_columns = nonzero_columns(&fast_basis);
-        let slow_columns = nonzero_columns(&basis);
+        let slow_map = SlowMap {
+            retained: low.clone(),
+            reflector: hub.then(|| {
+                let v = householder_vector(&b_low.normalize());
+                let scale = 2.0 / v.norm_squared();
+                (v, scale)
+            }),
+        };
         let xi_mass = basis.transpose() * &mass * &basis;
         let xi_mass_factor = xi_mass.clone().cholesky().ok_or("the slow mass on ξ is not positive definite")?;
         let n_x = xi_mass.nrows();
@@ -239,7 +248,7 @@ impl GearSplit {
         };
         let root = DMatrix::from_diagonal(&DVector::from_iterator(n_k, gear.eigenvalues.iter().map(|l| l.sqrt())));
         let slow_body_acceleration_damping_root = xi_mass_factor.solve(&(basis.transpose() * root * &basis));
-        Ok(GearSplit {
+        let split = GearSplit {
             slow_body_acceleration_stiffness,
             slow_body_acceleration_damping_root,
             iteration_blocks: Default::default(),
@@ -251,14 +260,43 @@ impl GearSplit {
             bore_turn,
             fast_stiffness,
             basis,
-            slow_columns,
+            slow_map,
             xi_mass,
             xi_mass_factor,
             xi_mass_is_unit,
             hub_frequency_hz,
             cutoff_hz,
             condensed_modes: high.len(),
-        })
+        };
+        split.check_slow_map()?;
+        Ok(split)
+    }
+
+    /// The step path's Q (`slow_map`) against the matrix it stands for, column by column.
+    fn check_slow_map(&self) -> Result<(), String> {
+        let (n_k, n_x) = (self.basis.nrows(), self.basis.ncols());
+        let mut worst: f64 = 0.0;
+        let mut xi = vec![0.0; n_x];
+        let mut eta = vec![0.0; n_k];
+        let mut back = vec![0.0; n_x];
+        for c in 0..n_x {
+            xi.fill(0.0);
+            xi[c] = 1.0;
+            eta.fill(0.0);
+            self.add_slow(&xi, &mut eta);
+            self.force_on_slow_into(0.0, &eta, &mut back);
+            for r in 0..n_k {
+                worst = worst.max((eta[r] - self.basis[(r, c)]).abs());
+            }
+            // QᵀQ = I.
+            for (r, b) in back.iter().enumerate() {
+                worst = worst.max((b - if r == c { 1.0 } else { 0.0 }).abs());
+            }
+        }
+        if worst > 1e-12 {
+            return Err(format!("the slow map differs from its basis Q by {worst:e}"));
+        }
+        Ok(())
     }
 
     /// (Fᵀv)_c.
@@ -304,16 +342,23 @@ impl GearSplit {
 
     /// η += Q·ξ (n_k).
     pub(super) fn add_slow(&self, xi: &[f64], eta: &mut [f64]) {
-        for (column, &x) in self.slow_columns.iter().zip(xi) {
-            for &(j, q) in column {
-                eta[j] += q * x;
+        let low = &self.slow_map.retained;
+        match &self.slow_map.reflector {
+            None => low.iter().zip(xi).for_each(|(&j, x)| eta[j] += x),
+            Some((v, scale)) => {
+                // H·[0; ξ] = [0; ξ] − s·v·(v[1..]·ξ).
+                let along = scale * v.iter().skip(1).zip(xi).map(|(v, x)| v * x).sum::<f64>();
+                eta[low[0]] -= along * v[0];
+                for (r, &j) in low.iter().enumerate().skip(1) {
+                    eta[j] += xi[r - 1] - along * v[r];
+                }
             }
         }
     }
 
     /// Qᵀ(f_Φ − b·f_θ/J): a force on (θ, η_Φ) on ξ.
     pub(super) fn force_on_slow(&self, f_theta: f64, f_phi: &[f64]) -> DVector<f64> {
-        let mut out = DVector::zeros(self.slow_columns.len());
+        let mut out = DVector::zeros(self.slow_size());
         self.force_on_slow_into(f_theta, f_phi, out.as_mut_slice());
         out
     }
@@ -322,12 +367,17 @@ impl GearSplit {
     pub(super) fn force_on_slow_into(&self, f_theta: f64, f_phi: &[f64], out: &mut [f64]) {
         let per_theta = f_theta / self.inertia_kgm2;
         let b = self.b.as_slice();
-        for (o, column) in out.iter_mut().zip(&self.slow_columns) {
-            let mut sum = 0.0;
-            for &(j, q) in column {
-                sum += q * (f_phi[j] - b[j] * per_theta);
+        let low = &self.slow_map.retained;
+        let x = |r: usize| f_phi[low[r]] - b[low[r]] * per_theta;
+        match &self.slow_map.reflector {
+            None => out.iter_mut().enumerate().for_each(|(r, o)| *o = x(r)),
+            Some((v, scale)) => {
+                // (H·x)[1..] = x[1..] − s·v[1..]·(v·x).
+                let along = scale * (0..low.len()).map(|r| v[r] * x(r)).sum::<f64>();
+                for (r, o) in out.iter_mut().enumerate() {
+                    *o = x(r + 1) - along * v[r + 1];
+                }
             }
-            *o = sum;
         }
     }
 
@@ -363,10 +413,26 @@ pub(super) fn nonzero_columns(m: &DMatrix<f64>) -> Vec<Vec<(usize, f64)>> {
 /// n − 1 columns of the Householder reflection H = I − 2vvᵀ/vᵀv, v = u ± e₁, which maps u to ∓e₁.
 pub(super) fn complement(u: &DVector<f64>) -> DMatrix<f64> {
     let n = u.len();
-    let mut v = u.clone();
-    v[0] += if u[0] >= 0.0 { 1.0 } else { -1.0 };
+    let v = householder_vector(u);
     let h = DMatrix::identity(n, n) - &v * v.transpose() * (2.0 / v.norm_squared());
     h.columns(1, n - 1).into_owned()
+}
+
+/// v of the reflection I − 2vvᵀ/(vᵀv) whose first column is ∓u (u a unit vector).
+fn householder_vector(u: &DVector<f64>) -> DVector<f64> {
+    let mut v = u.clone();
+    v[0] += if u[0] >= 0.0 { 1.0 } else { -1.0 };
+    v
+}
+
+/// Q of a split, as applied on the step path (`GearSplit::slow_map`).
+#[derive(Debug, Clone)]
+struct SlowMap {
+    /// The retained body modes' indices in η_Φ (n_l).
+    retained: Vec<usize>,
+    /// (v, 2/vᵀv) of the reflection whose columns 2… are Q on the retained modes; `None`: Q is
+    /// the identity there.
+    reflector: Option<(DVector<f64>, f64)>,
 }
 
 /// The condensation of both gears, and the fast coordinates of the last solve (the next
