@@ -672,11 +672,14 @@ impl<'a> PmorDynamics<'a> {
     }
 
     /// The mesh damper on the slow coordinates at the last solve, as accelerations (M⁻¹·D_c,
-    /// n_q × n_q; `None` before a solve or without contact): D_c = Σ c_s r_s r_sᵀ with c_s the
-    /// damper's share of section s, in proportion to its stiffness (`contact::apply_mesh_damper`;
-    /// the damper does not load the fast coordinates, so there is no Schur complement). Newton's
-    /// matrix of the discrete gradient needs it: without it the step converged at h·ζω of the
-    /// mesh mode per iteration (1.2 % at 1.5 kHz, 10 µs), three to four solves a step.
+    /// n_q × n_q; `None` before a solve or without contact). Section s's damper, c_s (its share of
+    /// c, in proportion to its stiffness: `contact::apply_mesh_damper`), acts on its approach rate
+    /// from the bodies, which the condensed body modes' rate ż_Φ = (∂z/∂y)_Φ·v is part of
+    /// (`damp_the_fast_motion`): ρ_s·v with ρ_s = r_s + (∂z/∂y)ᵀg̃_s = r_s − Σ_t k_t (g̃_sᵀw_t) r_t,
+    /// g̃_s the section's row on the fast body coordinates, w_t = K_f⁻¹g_t. So D_c = Σ c_s ρ_s ρ_sᵀ.
+    /// Newton's matrix of the discrete gradient needs it: without it the step converged at h·ζω
+    /// of the mesh mode per iteration (1.2 % at 1.5 kHz, 10 µs), three to four solves a step;
+    /// with r_s for ρ_s it over-damped the iteration on the small helical pair (15 % more solves).
     pub(super) fn slow_mesh_damper_acceleration(&self, qs: &QuasiStatic) -> Option<DMatrix<f64>> {
         let p = qs.prediction.borrow();
         let p = p.as_ref()?;
@@ -686,11 +689,27 @@ impl<'a> PmorDynamics<'a> {
         }
         let l = self.layout();
         let n_q = l.n_q[0] + l.n_q[1];
-        let mut d = DMatrix::zeros(n_q, n_q);
-        for (r, k) in p.slow_rows.iter().zip(&p.stiffness) {
-            let r = DVector::from_column_slice(r);
-            d.ger(self.mesh_damping_n_s_per_m * k / total, &r, &r, 1.0);
+        let n_s = p.slow_rows.len();
+        let mut rho = DMatrix::from_fn(n_s, n_q, |s, j| p.slow_rows[s][j]);
+        let n_z0 = qs.fast.borrow()[0].len();
+        let fast_bodies = [(0, qs.splits[0].fast_body_size()), (n_z0, qs.splits[1].fast_body_size())];
+        if fast_bodies.iter().any(|&(_, n)| n > 0) {
+            let w: Vec<DVector<f64>> = p
+                .fast_rows
+                .iter()
+                .map(|g| p.tangent.solve(g, &p.fast_rows, &p.stiffness))
+                .collect::<Result<_, _>>()
+                .ok()?;
+            let on_bodies = |g: &DVector<f64>, w: &DVector<f64>| -> f64 {
+                fast_bodies.iter().map(|&(o, n)| (o..o + n).map(|a| g[a] * w[a]).sum::<f64>()).sum()
+            };
+            let c = DMatrix::from_fn(n_s, n_s, |s, t| p.stiffness[t] * on_bodies(&p.fast_rows[s], &w[t]));
+            let r = rho.clone();
+            rho -= c * r;
         }
+        let damped =
+            DMatrix::from_fn(n_s, n_q, |s, j| self.mesh_damping_n_s_per_m * p.stiffness[s] / total * rho[(s, j)]);
+        let mut d = rho.transpose() * damped;
         self.slow_accelerations(qs, &mut d);
         d.iter().all(|x| x.is_finite()).then_some(d)
     }
