@@ -472,7 +472,7 @@ impl<'a> PmorDynamics<'a> {
     }
 
     /// I + h/2·(D + D_c) + h²/4·(A + A_c), LU-factored, with the mesh's stiffness A_c and damper
-    /// D_c at the last solve (`slow_contact_acceleration_stiffness`, `slow_mesh_damper_acceleration`)
+    /// D_c at the last solve (`slow_contact_accelerations`)
     /// beside the bodies' A and D: Newton's matrix for one step, made at its predictor and used
     /// for a few solves only, so factored rather than inverted (the inverse took a fifth of a
     /// step with the body modes to 6 × the mesh mode dynamic). `None` where there is no contact
@@ -482,10 +482,11 @@ impl<'a> PmorDynamics<'a> {
         qs: &super::quasi_static::QuasiStatic,
         h: f64,
     ) -> Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> {
-        let mut a = self.slow_contact_acceleration_stiffness(qs)? + self.slow_body_acceleration_stiffness(qs);
+        let (contact, mesh_damper) = self.slow_contact_accelerations(qs)?;
+        let mut a = contact + self.slow_body_acceleration_stiffness(qs);
         a *= 0.25 * h * h;
         let mut d = self.slow_body_acceleration_damping(qs).clone();
-        if let Some(mesh) = self.slow_mesh_damper_acceleration(qs) {
+        if let Some(mesh) = mesh_damper {
             d += mesh;
         }
         a += d * (0.5 * h);

@@ -640,13 +640,14 @@ impl<'a> PmorDynamics<'a> {
     }
 
     /// The contact's stiffness on the slow coordinates at the last solve, as accelerations
-    /// (M⁻¹·A_c, n_q × n_q; `None` before a solve or without contact). With the fast coordinates
+    /// (M⁻¹·A_c, n_q × n_q), with the mesh damper's (M⁻¹·D_c, `slow_mesh_damper_acceleration`;
+    /// `None` without a damper); `None` before a solve or without contact. With the fast coordinates
     /// at their equilibrium, the approach of section s is α_s = r_s·y + g_s·z and the fast tangent
     /// K_f = D + Σ k_s g_s g_sᵀ, so dz/dy = −K_f⁻¹ Σ k_t g_t r_tᵀ and the condensed stiffness is the
     /// Schur complement A_c = Σ k_s r_s r_sᵀ − Σ_s Σ_t k_s k_t (g_sᵀK_f⁻¹g_t) r_s r_tᵀ. What the
     /// discrete gradient's Newton matrix needs of the mesh (issue 39: with the bodies' stiffness
     /// alone it converged at (ωh)²/4 per iteration on the mesh mode, four solves a step).
-    pub(super) fn slow_contact_acceleration_stiffness(&self, qs: &QuasiStatic) -> Option<DMatrix<f64>> {
+    pub(super) fn slow_contact_accelerations(&self, qs: &QuasiStatic) -> Option<(DMatrix<f64>, Option<DMatrix<f64>>)> {
         let p = qs.prediction.borrow();
         let p = p.as_ref()?;
         if p.stiffness.is_empty() {
@@ -654,6 +655,7 @@ impl<'a> PmorDynamics<'a> {
         }
         let l = self.layout();
         let n_q = l.n_q[0] + l.n_q[1];
+        // w_t = K_f⁻¹g_t, shared by the stiffness and the damper.
         let w: Vec<DVector<f64>> = p
             .fast_rows
             .iter()
@@ -668,7 +670,8 @@ impl<'a> PmorDynamics<'a> {
         let c = DMatrix::from_fn(n_s, n_s, |s, t| p.fast_rows[s].dot(&w[t]));
         let mut a = kr.transpose() * (&r - c * &kr);
         self.slow_accelerations(qs, &mut a);
-        a.iter().all(|x| x.is_finite()).then_some(a)
+        let damper = self.slow_mesh_damper_acceleration(qs, p, &w, r);
+        a.iter().all(|x| x.is_finite()).then_some((a, damper))
     }
 
     /// The mesh damper on the slow coordinates at the last solve, as accelerations (M⁻¹·D_c,
@@ -680,26 +683,22 @@ impl<'a> PmorDynamics<'a> {
     /// Newton's matrix of the discrete gradient needs it: without it the step converged at h·ζω
     /// of the mesh mode per iteration (1.2 % at 1.5 kHz, 10 µs), three to four solves a step;
     /// with r_s for ρ_s it over-damped the iteration on the small helical pair (15 % more solves).
-    pub(super) fn slow_mesh_damper_acceleration(&self, qs: &QuasiStatic) -> Option<DMatrix<f64>> {
-        let p = qs.prediction.borrow();
-        let p = p.as_ref()?;
+    fn slow_mesh_damper_acceleration(
+        &self,
+        qs: &QuasiStatic,
+        p: &Prediction,
+        w: &[DVector<f64>],
+        slow_rows: DMatrix<f64>,
+    ) -> Option<DMatrix<f64>> {
         let total: f64 = p.stiffness.iter().sum();
         if p.stiffness.is_empty() || self.mesh_damping_n_s_per_m <= 0.0 || total <= 0.0 {
             return None;
         }
-        let l = self.layout();
-        let n_q = l.n_q[0] + l.n_q[1];
         let n_s = p.slow_rows.len();
-        let mut rho = DMatrix::from_fn(n_s, n_q, |s, j| p.slow_rows[s][j]);
+        let mut rho = slow_rows;
         let n_z0 = qs.fast.borrow()[0].len();
         let fast_bodies = [(0, qs.splits[0].fast_body_size()), (n_z0, qs.splits[1].fast_body_size())];
         if fast_bodies.iter().any(|&(_, n)| n > 0) {
-            let w: Vec<DVector<f64>> = p
-                .fast_rows
-                .iter()
-                .map(|g| p.tangent.solve(g, &p.fast_rows, &p.stiffness))
-                .collect::<Result<_, _>>()
-                .ok()?;
             let on_bodies = |g: &DVector<f64>, w: &DVector<f64>| -> f64 {
                 fast_bodies.iter().map(|&(o, n)| (o..o + n).map(|a| g[a] * w[a]).sum::<f64>()).sum()
             };
@@ -707,8 +706,9 @@ impl<'a> PmorDynamics<'a> {
             let r = rho.clone();
             rho -= c * r;
         }
-        let damped =
-            DMatrix::from_fn(n_s, n_q, |s, j| self.mesh_damping_n_s_per_m * p.stiffness[s] / total * rho[(s, j)]);
+        let damped = DMatrix::from_fn(n_s, rho.ncols(), |s, j| {
+            self.mesh_damping_n_s_per_m * p.stiffness[s] / total * rho[(s, j)]
+        });
         let mut d = rho.transpose() * damped;
         self.slow_accelerations(qs, &mut d);
         d.iter().all(|x| x.is_finite()).then_some(d)
