@@ -455,11 +455,10 @@ pub(super) fn apply_mesh_damper(
     let slow = [1 + model.gears[0].modes(), 1 + model.gears[1].modes()];
     let total_stiffness: f64 = sections.iter().map(|s| s.stiffness_n_per_m).sum();
     for section in sections {
-        let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
         let approach_rate: f64 = (0..2)
             .map(|i| section.rows[i][..slow[i]].iter().zip(poses[i].velocity).map(|(r, v)| r * v).sum::<f64>())
             .sum();
-        let damper = (c * approach_rate).max(-section.force_n);
+        let damper = section_damper_force_n(section, damper_n_s_per_m, total_stiffness, approach_rate);
         for i in 0..2 {
             for (k, r) in section.rows[i][..slow[i]].iter().enumerate() {
                 out.force[i][k] -= damper * r;
@@ -469,4 +468,17 @@ pub(super) fn apply_mesh_damper(
         out.damper_force_n += section.flank_sign * damper;
         out.damper_power_w += damper * approach_rate;
     }
+}
+
+/// Section s's mesh damper force at approach rate α̇: its share of c in proportion to its
+/// stiffness, c_s = c·k_s/Σk, on α̇, bounded below by minus its elastic force so that it never
+/// pulls (F_d = max(c_s·α̇, −F_s)).
+pub(super) fn section_damper_force_n(
+    section: &SectionRows,
+    damper_n_s_per_m: f64,
+    total_stiffness_n_per_m: f64,
+    approach_rate_m_per_s: f64,
+) -> f64 {
+    let c = damper_n_s_per_m * section.stiffness_n_per_m / total_stiffness_n_per_m;
+    (c * approach_rate_m_per_s).max(-section.force_n)
 }

@@ -47,7 +47,7 @@
 //! the FE value) has a physical hub mode, which stays.
 
 pub use super::condensation::*;
-use super::contact::GearPose;
+use super::contact::{section_damper_force_n, GearPose, SectionRows};
 use super::contact_law::contact_loads;
 use super::equations::shape_stiffness_of_interval;
 pub use super::model::Condensation;
@@ -578,19 +578,24 @@ impl<'a> PmorDynamics<'a> {
             let total_stiffness: f64 = stiffness.iter().sum();
             if self.mesh_damping_n_s_per_m > 0.0 && total_stiffness > 0.0 {
                 let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
-                for section in e.outputs.contact.sections.iter() {
-                    let c = self.mesh_damping_n_s_per_m * section.stiffness_n_per_m / total_stiffness;
+                let damper = |section: &SectionRows, rate: f64| {
+                    section_damper_force_n(section, self.mesh_damping_n_s_per_m, total_stiffness, rate)
+                };
+                let contact = &mut e.outputs.contact;
+                for section in contact.sections.iter() {
                     let along = |v: &[Vec<f64>; 2]| -> f64 {
                         (0..2)
                             .map(|i| section.rows[i][..n_body[i]].iter().zip(&v[i]).map(|(r, v)| r * v).sum::<f64>())
                             .sum()
                     };
                     let (slow_rate, fast_rate) = (along(&slow_velocity), along(&fast_velocity));
-                    let before = (c * slow_rate).max(-section.force_n);
-                    let after = (c * (slow_rate + fast_rate)).max(-section.force_n);
+                    let before = damper(section, slow_rate);
+                    let after = damper(section, slow_rate + fast_rate);
                     let added = after - before;
                     power += after * (slow_rate + fast_rate) - before * slow_rate;
-                    e.outputs.contact.damper_force_n += section.flank_sign * added;
+                    // The mesh force output includes the damper (`contact_loads`).
+                    contact.damper_force_n += section.flank_sign * added;
+                    contact.normal_force_n += section.flank_sign * added;
                     for i in 0..2 {
                         for (f, r) in body_force[i].iter_mut().zip(&section.rows[i][..n_body[i]]) {
                             *f += added * r;
