@@ -940,6 +940,15 @@ fn contact_beyond_the_half_width_rule_is_an_error() {
     }
 }
 
+/// The fixture's pair with the build's damping and a mesh damper at ratio ζ of the spec.
+fn with_mesh_damper(f: &Fixture, zeta: f64) -> PmorDynamics<'_> {
+    let m = &f.model;
+    let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
+    d.mesh_damping_n_s_per_m =
+        m.mesh_damper_n_s_per_m(zeta, [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2]);
+    d
+}
+
 /// The mesh damper (`PmorDynamics::mesh_damping_n_s_per_m`, the FMU's mesh_damping_ratio)
 /// gives the mesh mode the damping ratio asked (evidence: the linearized pair's eigenvalues,
 /// `linear::mesh_mode`, the mode followed from the damper-free flow as the damper grows) on the
@@ -953,13 +962,8 @@ fn contact_beyond_the_half_width_rule_is_an_error() {
 fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
     let f = fixture();
     let m = &f.model;
-    let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
     let torque = 185.0;
-    let dynamics = |zeta: f64| {
-        let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
-        d.mesh_damping_n_s_per_m = m.mesh_damper_n_s_per_m(zeta, inertia);
-        d
-    };
+    let dynamics = |zeta: f64| with_mesh_damper(f, zeta);
     eprintln!("the build's damper gain g = {:.3}", m.mesh_damper_gain);
     let positions: Vec<f64> = (0..8).map(|j| (j as f64 + 0.5) / 8.0 * m.gears[1].pitch_rad()).collect();
     let ratios = |zeta: f64| -> Vec<(f64, f64, f64)> {
@@ -1009,12 +1013,10 @@ fn the_mesh_damper_damps_the_mesh_mode_at_about_the_ratio_asked() {
 fn the_condensed_pair_damps_the_mesh_mode_as_the_full_pair_does() {
     let f = fixture();
     let m = &f.model;
-    let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
     let torque = 185.0;
     let ratios = |condensation: Condensation| -> Vec<f64> {
-        let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
+        let mut d = with_mesh_damper(f, 0.05);
         d.set_condensation(condensation);
-        d.mesh_damping_n_s_per_m = m.mesh_damper_n_s_per_m(0.05, inertia);
         (0..8)
             .map(|j| {
                 let theta2 = (j as f64 + 0.5) / 8.0 * m.gears[1].pitch_rad();
