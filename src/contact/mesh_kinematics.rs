@@ -159,6 +159,12 @@ pub struct PairPlacement {
     /// The part of the backlash that the meshed profiles do not carry (tooth thinning,
     /// `mounting.backlash_mm`), along the line of action (m): it opens the coast gap.
     thinning_loa_m: f64,
+    /// The line of action's constants, read by every section's search: cos β_b, tan β_b, the
+    /// pitch point's distance from T₁ and the length T₁T₂ (m).
+    cos_bb: f64,
+    tan_bb: f64,
+    pitch_point_m: f64,
+    loa_m: f64,
 }
 
 fn rot(a: f64, p: [f64; 2]) -> [f64; 2] {
@@ -199,6 +205,10 @@ impl PairPlacement {
                     + pair.misalignment_m.abs()),
             smallest_arm_ratio: 0.0,
             thinning_loa_m: pair.backlash_loa_m - profile_backlash,
+            cos_bb: pair.base_helix_angle_rad.cos(),
+            tan_bb: pair.base_helix_angle_rad.tan(),
+            pitch_point_m: pair.pitch_point_m(),
+            loa_m: pair.loa_length_m(),
             pair: pair.clone(),
             gamma: [-psi_w1, psi_w2],
             flank_constant: [
@@ -378,8 +388,8 @@ impl PairPlacement {
     pub fn candidate_pairs(&self, theta2: f64) -> std::ops::RangeInclusive<i64> {
         let p = &self.pair;
         let pb = p.base_pitch_m;
-        let half_b = 0.5 * p.face_width_m * p.base_helix_angle_rad.tan().abs();
-        let u0 = p.pitch_point_m() + p.gear2.base_radius_m * theta2;
+        let half_b = 0.5 * p.face_width_m * self.tan_bb.abs();
+        let u0 = self.pitch_point_m + p.gear2.base_radius_m * theta2;
         let lo = ((p.path_start_m - 0.6 * pb - half_b - u0) / pb).ceil() as i64;
         let hi = ((p.path_end_m + 0.6 * pb + half_b - u0) / pb).floor() as i64;
         lo..=hi
@@ -469,13 +479,11 @@ impl PairPlacement {
     pub fn section_contact(&self, theta: [f64; 2], j: i64, section: usize, z: f64) -> Option<SectionContact> {
         let p = &self.pair;
         let (g1, g2) = (&p.gear1, &p.gear2);
-        let cos_bb = p.base_helix_angle_rad.cos();
+        let cos_bb = self.cos_bb;
         let teeth = [j.rem_euclid(g1.teeth as i64) as usize, j.rem_euclid(g2.teeth as i64) as usize];
-        let u = p.pitch_point_m()
-            + g2.base_radius_m * theta[1]
-            + j as f64 * p.base_pitch_m
-            + self.hand * z * p.base_helix_angle_rad.tan();
-        let loa = p.loa_length_m();
+        let u =
+            self.pitch_point_m + g2.base_radius_m * theta[1] + j as f64 * p.base_pitch_m + self.hand * z * self.tan_bb;
+        let loa = self.loa_m;
         let form = [g1.form_radius_m.max(g1.base_radius_m), g2.form_radius_m.max(g2.base_radius_m)];
         let mut best: Option<SectionContact> = None;
         let mut consider = |mut c: SectionContact| {
@@ -492,57 +500,68 @@ impl PairPlacement {
         // conjugate contact outlived gear 1's tip by TE and handed over to the tip corner a
         // distance ≈ TE²/2ρ away (a jump of the contact potential the energy test saw).
         let u1 = u + g1.base_radius_m * theta[0] - g2.base_radius_m * theta[1];
-        // Conjugate contact on the LOA, inside the path of contact.
+        // Conjugate contact on the LOA, inside the path of contact. Two involutes of one base
+        // circle are a base-circle arc apart along their common normal, so the transverse gap is
+        // u − u₁ exactly (`conjugate_penetration_is_the_transmission_error` checks it against the
+        // flanks placed in the world and measured, which is what this search did before issue 39).
         if u >= p.path_start_m && u1 <= p.path_end_m && u <= loa {
-            let r2 = g2.base_radius_m.hypot(loa - u);
-            let w = self.to_world(1, theta[1], self.flank_point(1, j, r2, z));
-            let own1 = self.to_own(0, theta[0], w);
             consider(SectionContact {
                 pair: j,
                 section,
                 z_m: z,
                 kind: ContactKind::Conjugate,
                 teeth,
-                radius_m: [g1.base_radius_m.hypot(u1), r2],
-                rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, own1),
+                radius_m: [g1.base_radius_m.hypot(u1), g2.base_radius_m.hypot(loa - u)],
+                rigid_penetration_m: cos_bb * (u1 - u),
                 arm_ratio: cos_bb,
                 curvature_radius_m: [u1, loa - u],
             });
         }
         // Gear 2's tip corner on gear 1's flank (the flank normal is tangent to base circle 1,
-        // so the arm on gear 1 is r_b1 exactly).
-        let tip2 = self.to_own(0, theta[0], self.to_world(1, theta[1], self.flank_point(1, j, g2.tip_radius_m, z)));
-        let r = tip2[0].hypot(tip2[1]);
-        if (form[0]..=g1.tip_radius_m).contains(&r) && (u < p.path_start_m) {
-            consider(SectionContact {
-                pair: j,
-                section,
-                z_m: z,
-                kind: ContactKind::TipOfGear2,
-                teeth,
-                radius_m: [r, g2.tip_radius_m],
-                rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, tip2),
-                arm_ratio: cos_bb,
-                // The corner is gear 2's rounded tip edge, not its involute.
-                curvature_radius_m: [(r * r - g1.base_radius_m.powi(2)).sqrt(), corner_radius(g2, p.path_start_m - u)],
-            });
+        // so the arm on gear 1 is r_b1 exactly): a candidate only before the path's start, and
+        // only there placed (the corners' geometry is most of a search's transcendentals).
+        if u < p.path_start_m {
+            let tip2 = self.to_own(0, theta[0], self.to_world(1, theta[1], self.flank_point(1, j, g2.tip_radius_m, z)));
+            let r = tip2[0].hypot(tip2[1]);
+            if (form[0]..=g1.tip_radius_m).contains(&r) {
+                consider(SectionContact {
+                    pair: j,
+                    section,
+                    z_m: z,
+                    kind: ContactKind::TipOfGear2,
+                    teeth,
+                    radius_m: [r, g2.tip_radius_m],
+                    rigid_penetration_m: -cos_bb * self.distance_from_flank(0, j, z, tip2),
+                    arm_ratio: cos_bb,
+                    // The corner is gear 2's rounded tip edge, not its involute.
+                    curvature_radius_m: [
+                        (r * r - g1.base_radius_m.powi(2)).sqrt(),
+                        corner_radius(g2, p.path_start_m - u),
+                    ],
+                });
+            }
         }
-        // Gear 1's tip corner on gear 2's flank.
-        let w1 = self.to_world(0, theta[0], self.flank_point(0, j, g1.tip_radius_m, z));
-        let tip1 = self.to_own(1, theta[1], w1);
-        let r = tip1[0].hypot(tip1[1]);
-        if (form[1]..=g2.tip_radius_m).contains(&r) && (u1 > p.path_end_m) {
-            consider(SectionContact {
-                pair: j,
-                section,
-                z_m: z,
-                kind: ContactKind::TipOfGear1,
-                teeth,
-                radius_m: [g1.tip_radius_m, r],
-                rigid_penetration_m: -cos_bb * self.distance_from_flank(1, j, z, tip1),
-                arm_ratio: cos_bb * self.arm_on_gear1_of_gear2_normal(w1, theta[1], j, z) / g1.base_radius_m,
-                curvature_radius_m: [corner_radius(g1, u1 - p.path_end_m), (r * r - g2.base_radius_m.powi(2)).sqrt()],
-            });
+        // Gear 1's tip corner on gear 2's flank: a candidate only past the path's end.
+        if u1 > p.path_end_m {
+            let w1 = self.to_world(0, theta[0], self.flank_point(0, j, g1.tip_radius_m, z));
+            let tip1 = self.to_own(1, theta[1], w1);
+            let r = tip1[0].hypot(tip1[1]);
+            if (form[1]..=g2.tip_radius_m).contains(&r) {
+                consider(SectionContact {
+                    pair: j,
+                    section,
+                    z_m: z,
+                    kind: ContactKind::TipOfGear1,
+                    teeth,
+                    radius_m: [g1.tip_radius_m, r],
+                    rigid_penetration_m: -cos_bb * self.distance_from_flank(1, j, z, tip1),
+                    arm_ratio: cos_bb * self.arm_on_gear1_of_gear2_normal(w1, theta[1], j, z) / g1.base_radius_m,
+                    curvature_radius_m: [
+                        corner_radius(g1, u1 - p.path_end_m),
+                        (r * r - g2.base_radius_m.powi(2)).sqrt(),
+                    ],
+                });
+            }
         }
         best
     }
@@ -660,6 +679,14 @@ mod tests {
                                 assert!(
                                     (w[0].hypot(w[1]) - r1).abs() < 1e-9,
                                     "{file} {hand:?} j {j} z {z}: off the LOA"
+                                );
+                                // The gap measured: gear 2's flank point placed in the world and
+                                // its distance from gear 1's flank (the search keeps the closed form).
+                                let measured = -cos_bb * place.distance_from_flank(0, j, z, place.to_own(0, theta1, w));
+                                assert!(
+                                    (measured - c.rigid_penetration_m).abs() < 1e-12,
+                                    "{file} {hand:?} j {j} z {z}: measured {measured:e} m, closed form {:e} m",
+                                    c.rigid_penetration_m
                                 );
                             }
                         }
