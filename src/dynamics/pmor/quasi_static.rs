@@ -758,6 +758,41 @@ impl<'a> PmorDynamics<'a> {
         });
     }
 
+    /// The fast coordinates' first-order response to a move Δy of the slow positions from the
+    /// last solve's equilibrium (the implicit function theorem, as `Prediction`): K·Δz =
+    /// −Σ_s k_s·g_s·(r_s·Δy). Kept: z += Δz, and the prediction moves with it, so the next
+    /// solve predicts from the moved point. Returns each gear's bore turn Δθ = Δφ − (Fᵀb/J)·Δz_Φ
+    /// (the slow body coordinates do not turn the bore: Q ⟂ b), and each loaded section's
+    /// approach change Δα_s = r_s·Δy + g_s·Δz. Without a solve in contact, the fast coordinates
+    /// do not follow: Δθ = Δφ.
+    pub(super) fn follow_slow_move(&self, qs: &QuasiStatic, dq: &[f64]) -> Result<([f64; 2], Vec<f64>), String> {
+        let l = self.layout();
+        let mut turn = [dq[l.q(0)], dq[l.q(1)]];
+        let mut prediction = qs.prediction.borrow_mut();
+        let Some(p) = prediction.as_mut() else { return Ok((turn, Vec::new())) };
+        p.positions.iter_mut().zip(dq).for_each(|(y, d)| *y += d);
+        if p.stiffness.is_empty() {
+            return Ok((turn, Vec::new()));
+        }
+        let mut fast = qs.fast.borrow_mut();
+        let n0 = fast[0].len();
+        let mut force = DVector::zeros(n0 + fast[1].len());
+        let slow_approach: Vec<f64> =
+            p.slow_rows.iter().map(|r| r.iter().zip(dq).map(|(r, d)| r * d).sum::<f64>()).collect();
+        for ((g, k), a) in p.fast_rows.iter().zip(&p.stiffness).zip(&slow_approach) {
+            force.axpy(-k * a, g, 1.0);
+        }
+        let dz = p.tangent.solve(&force, &p.fast_rows, &p.stiffness)?;
+        let approach = p.fast_rows.iter().zip(&slow_approach).map(|(g, a)| a + g.dot(&dz)).collect();
+        for i in 0..2 {
+            let offset = if i == 0 { 0 } else { n0 };
+            fast[i].iter_mut().enumerate().for_each(|(k, z)| *z += dz[offset + k]);
+            let bore_turn = &qs.splits[i].bore_turn;
+            turn[i] -= (0..bore_turn.len()).map(|c| bore_turn[c] * dz[offset + c]).sum::<f64>();
+        }
+        Ok((turn, approach))
+    }
+
     /// ẏ of the condensed pair and the outputs there; the fast coordinates found are kept for
     /// `unpack`. The input work is booked by the steppers on the bore's travel.
     pub(super) fn condensed_rhs(
