@@ -43,7 +43,7 @@ pub struct GearPose<'a> {
 }
 
 /// What the contact puts on the pair.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct ContactLoads {
     /// Generalized forces on (θᵢ, ηᵢ), per gear.
     pub force: [Vec<f64>; 2],
@@ -70,7 +70,7 @@ pub struct ContactLoads {
 /// One loaded section: its elastic force, its Hertz tangent stiffness and the row through
 /// which its force enters each gear's coordinates — what the mesh damper reads (on θ and η_Φ)
 /// and what the quasi-static condensation's tangent stiffness Σ k_s·r rᵀ is made of.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct SectionRows {
     pub flank_sign: f64,
     pub force_n: f64,
@@ -147,32 +147,61 @@ fn locate(
 }
 
 /// The displacements u and ∂u/∂ϑ of the flank nodes one contact evaluation has read, for one
-/// gear and flank at one pose: neighbouring axial sections share a layer of nodes, so about a
-/// third of the reads repeat (a short list: a few dozen nodes per evaluation).
-struct NodeDisplacements(Vec<(usize, [f64; 3], [f64; 3])>);
+/// gear and flank at one pose: neighbouring axial sections share a layer of nodes and the tip
+/// corners' differences read the same nodes again, so most reads repeat. Found by the node's
+/// hash (open addressing): a list searched end to end took a tenth of a helical pair's
+/// evaluation, whose sections read a hundred nodes and more.
+struct NodeDisplacements {
+    /// Per hash slot, 1 + the node's place in `read` (0: empty).
+    slots: [u32; NODE_SLOTS],
+    read: Vec<(usize, [f64; 3], [f64; 3])>,
+}
+
+/// Hash slots of `NodeDisplacements`: a power of two, four times the most nodes an evaluation
+/// reads of one gear (beyond three quarters full, a node is read without being kept).
+const NODE_SLOTS: usize = 1024;
 
 impl NodeDisplacements {
-    fn with_capacity(nodes: usize) -> Self {
-        NodeDisplacements(Vec::with_capacity(nodes))
+    fn new() -> Self {
+        NodeDisplacements { slots: [0; NODE_SLOTS], read: Vec::with_capacity(64) }
     }
 
     fn get(&mut self, g: &super::model::PmorGear, flank: Flank, pose: &GearPose, node: usize) -> ([f64; 3], [f64; 3]) {
-        if let Some(&(_, u, du)) = self.0.iter().find(|(k, _, _)| *k == node) {
-            return (u, du);
+        // Fibonacci hashing: the top bits of node·2⁶⁴/φ.
+        let mut slot = (node as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - NODE_SLOTS.trailing_zeros());
+        loop {
+            match self.slots[slot as usize] {
+                0 => break,
+                kept => {
+                    let (k, u, du) = self.read[kept as usize - 1];
+                    if k == node {
+                        return (u, du);
+                    }
+                    slot = (slot + 1) % NODE_SLOTS as u64;
+                }
+            }
         }
         let (u, du) = g.node_displacement(flank, &pose.stencil, node, pose.eta);
-        self.0.push((node, u, du));
+        if 4 * self.read.len() < 3 * NODE_SLOTS {
+            self.read.push((node, u, du));
+            self.slots[slot as usize] = self.read.len() as u32;
+        }
         (u, du)
     }
 }
 
+/// Gear i's elastic approach at `at`, its nodes read through `nodes` (the pose's own). With the
+/// gear turned by `turn` (rad) from its pose at fixed η, each node's displacement is taken as
+/// u + turn·∂u/∂ϑ: the tip corners' central differences turn by 10⁻⁷ rad, where the term left
+/// out, ½turn²·∂²u/∂ϑ², cancels in the difference.
 fn elastic_approach(
     model: &PmorModel,
     i: usize,
     flank: Flank,
     pose: &GearPose,
     at: &Located,
-    mut cache: Option<&mut NodeDisplacements>,
+    nodes: &mut NodeDisplacements,
+    turn: f64,
 ) -> Result<ElasticApproach, String> {
     let g = &model.gears[i];
     let grid = &g.flank(flank).grid;
@@ -186,10 +215,8 @@ fn elastic_approach(
     let (mut u, mut du_dr, mut du_dtheta) = ([0.0; 3], [0.0; 3], [0.0; 3]);
     for (&(k, w), &(_, dw)) in shares.iter().zip(&slopes) {
         let n_k = grid.nodes[k].1;
-        let (u_k, du_k) = match cache.as_deref_mut() {
-            Some(cache) => cache.get(g, flank, pose, k),
-            None => g.node_displacement(flank, &pose.stencil, k, pose.eta),
-        };
+        let (u_k, du_k) = nodes.get(g, flank, pose, k);
+        let u_k = [0, 1, 2].map(|c| u_k[c] + turn * du_k[c]);
         for c in 0..3 {
             m[c] += w * n_k[c];
             dm[c] += dw * n_k[c];
@@ -214,23 +241,30 @@ fn elastic_approach(
 }
 
 /// The penetration and the transverse effective radius of curvature of pair j on `flank`,
-/// search section s, at perturbed poses (the tip corners' central differences).
+/// search section s, with gear `turned.0` turned by `turned.1` (rad) from its pose at fixed η
+/// (the tip corners' central differences; the nodes read through `nodes`, the poses' own).
+#[allow(clippy::too_many_arguments)]
 fn penetration_at(
     model: &PmorModel,
     place: &PairPlacement,
     flank: Flank,
     poses: [&GearPose; 2],
+    turned: (usize, f64),
     j: i64,
     section: usize,
     z_mid: f64,
+    nodes: &mut [NodeDisplacements; 2],
 ) -> Result<Option<(f64, f64)>, String> {
     let sections = model.gears[0].flank(flank).grid.layer_z_m.len() - 1;
-    let Some(at) = locate(place, flank, [poses[0].theta, poses[1].theta], j, section, z_mid, sections) else {
+    let mut theta = [poses[0].theta, poses[1].theta];
+    theta[turned.0] += turned.1;
+    let Some(at) = locate(place, flank, theta, j, section, z_mid, sections) else {
         return Ok(None);
     };
     let mut alpha = at.c.rigid_penetration_m;
-    for i in 0..2 {
-        alpha += elastic_approach(model, i, flank, poses[i], &at, None)?.value_m;
+    for (i, nodes) in nodes.iter_mut().enumerate() {
+        let turn = if i == turned.0 { turned.1 } else { 0.0 };
+        alpha += elastic_approach(model, i, flank, poses[i], &at, nodes, turn)?.value_m;
     }
     Ok(Some((alpha, transverse_radius(&at.c))))
 }
@@ -285,7 +319,6 @@ pub fn section_contact_loads(
     model: &PmorModel,
     place: &PairPlacement,
     poses: [&GearPose; 2],
-    restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
     loading: Loading,
     damper_n_s_per_m: f64,
     collect_rows: bool,
@@ -307,10 +340,10 @@ pub fn section_contact_loads(
     let info = &model.info;
     let theta = [poses[0].theta, poses[1].theta];
     let spur = p.base_helix_angle_rad == 0.0;
-    let mut tmp = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
+    let mut band_row = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
     for &flank in flanks {
-        // The flank nodes read at the poses themselves (not the tip corners' differences).
-        let mut nodes = [NodeDisplacements::with_capacity(48), NodeDisplacements::with_capacity(48)];
+        // The flank nodes read at the poses (the tip corners' differences read them too).
+        let mut nodes = [NodeDisplacements::new(), NodeDisplacements::new()];
         let searched = place.searched_angles(flank, theta);
         let reach: f64 =
             (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();
@@ -334,8 +367,8 @@ pub fn section_contact_loads(
                     continue; // a gap the deformation cannot close (most of the coast flanks)
                 }
                 let e = [
-                    elastic_approach(model, 0, flank, poses[0], &at, Some(&mut nodes[0]))?,
-                    elastic_approach(model, 1, flank, poses[1], &at, Some(&mut nodes[1]))?,
+                    elastic_approach(model, 0, flank, poses[0], &at, &mut nodes[0], 0.0)?,
+                    elastic_approach(model, 1, flank, poses[1], &at, &mut nodes[1], 0.0)?,
                 ];
                 let alpha = c.rigid_penetration_m + e[0].value_m + e[1].value_m;
                 if alpha <= 0.0 {
@@ -367,19 +400,20 @@ pub fn section_contact_loads(
                         ),
                         Loading::Point => (e[i].shares.to_vec(), Some(e[i].normal)),
                     };
+                    // The band's row Σ w·V_kᵀn_k, then its force.
+                    let row = &mut band_row[i];
+                    row.fill(0.0);
                     for &(k, w) in &band {
                         match normal {
-                            Some(n) => g.basis_row(flank, &poses[i].stencil, k, n, &mut tmp[i]),
-                            None => g.normal_basis_row(flank, &poses[i].stencil, k, &mut tmp[i]),
+                            Some(n) => g.add_basis_row(flank, &poses[i].stencil, k, n.map(|c| w * c), row),
+                            None => g.add_normal_basis_row(flank, &poses[i].stencil, k, w, row),
                         }
-                        for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
-                            *f -= force * w * t;
-                        }
-                        if let Some(section) = section.as_mut() {
-                            for (r, t) in section.rows[i][1..].iter_mut().zip(&tmp[i]) {
-                                *r += w * t;
-                            }
-                        }
+                    }
+                    for (f, r) in out.force[i][1..].iter_mut().zip(row.iter()) {
+                        *f -= force * r;
+                    }
+                    if let Some(section) = section.as_mut() {
+                        section.rows[i][1..].copy_from_slice(row);
                     }
                 }
                 // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
@@ -392,20 +426,12 @@ pub fn section_contact_loads(
                     ContactKind::TipOfGear1 | ContactKind::TipOfGear2 => {
                         let mut slopes = ([0.0; 2], [0.0; 2]);
                         for i in 0..2 {
-                            let shifted = |sign: f64| -> Result<Option<(f64, f64)>, String> {
-                                let theta = poses[i].theta + sign * ANGLE_STEP;
-                                let pose = GearPose {
-                                    theta,
-                                    anchor: poses[i].anchor,
-                                    stencil: restage(i, theta)?,
-                                    eta: poses[i].eta,
-                                    velocity: poses[i].velocity,
-                                };
-                                let both = if i == 0 { [&pose, poses[1]] } else { [poses[0], &pose] };
-                                penetration_at(model, place, flank, both, j, s, z_mid)
-                            };
+                            let up =
+                                penetration_at(model, place, flank, poses, (i, ANGLE_STEP), j, s, z_mid, &mut nodes)?;
+                            let down =
+                                penetration_at(model, place, flank, poses, (i, -ANGLE_STEP), j, s, z_mid, &mut nodes)?;
                             // A difference that leaves the corner's reach contributes nothing.
-                            let (Some(up), Some(down)) = (shifted(1.0)?, shifted(-1.0)?) else { continue };
+                            let (Some(up), Some(down)) = (up, down) else { continue };
                             slopes.0[i] = (up.0 - down.0) / (2.0 * ANGLE_STEP);
                             slopes.1[i] = (up.1 - down.1) / (2.0 * ANGLE_STEP);
                         }

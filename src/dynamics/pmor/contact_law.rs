@@ -9,7 +9,7 @@ use super::penalty::penalty_contact_loads;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 
 /// Contact loads of the pair on both flanks; `restage` maps a gear's angle to its stencil (for
-/// the differences).
+/// the penalty law's differences).
 /// The mesh damper: a viscous coefficient c (N·s/m) shared by the loaded sections in proportion
 /// to their Hertz tangent stiffness, each acting on its approach velocity α̇ = J·q̇ from the
 /// gears' rotation and body modes (θ̇, η̇_Φ) and never pulling: F_d = max(c_s·α̇, −F_s), so the
@@ -29,5 +29,5 @@ pub fn contact_loads(
     if let FlankContact::Penalty { .. } = model.info.contact {
         return penalty_contact_loads(model, place, poses, restage, damper_n_s_per_m, collect_rows);
     }
-    section_contact_loads(model, place, poses, restage, loading, damper_n_s_per_m, collect_rows, &Flank::BOTH)
+    section_contact_loads(model, place, poses, loading, damper_n_s_per_m, collect_rows, &Flank::BOTH)
 }

@@ -83,15 +83,13 @@ impl PmorGear {
         phi * norm(eta_phi) + weights * shapes * norm(eta_psi)
     }
 
-    /// Row of the basis V = [Φ, Ψ] for a direction at node k of `flank`:
-    /// dirᵀ·[Φ_k, Σₐ wₐ S_{a,k}].
-    pub fn basis_row(&self, flank: Flank, st: &Stencil, node: usize, dir: [f64; 3], out: &mut [f64]) {
+    /// Adds the row of the basis V = [Φ, Ψ] for a direction at node k of `flank` to `out`:
+    /// out += dirᵀ·[Φ_k, Σₐ wₐ S_{a,k}] (a weight is the direction's length).
+    pub fn add_basis_row(&self, flank: Flank, st: &Stencil, node: usize, dir: [f64; 3], out: &mut [f64]) {
         let rows = self.flank(flank);
         let n_k = self.modes();
         let (phi_part, shape_part) = out.split_at_mut(n_k);
-        phi_part.fill(0.0);
         add_combined3(dir, rows.phi_rows_of_node(node), phi_part);
-        shape_part.fill(0.0);
         for a in 0..4 {
             let w = st.weights.w[a];
             if w != 0.0 {
@@ -102,16 +100,19 @@ impl PmorGear {
 }
 
 impl PmorGear {
-    /// Row of the basis V = [Φ, Ψ] along node k's own flank normal: n_kᵀ·[Φ_k, Σₐ wₐ S_{a,k}]
-    /// (`basis_row` with dir = n_k, from the rows stored along the normals).
-    pub fn normal_basis_row(&self, flank: Flank, st: &Stencil, node: usize, out: &mut [f64]) {
+    /// Adds `weight` times the row of the basis V = [Φ, Ψ] along node k's own flank normal to
+    /// `out`: out += weight·n_kᵀ·[Φ_k, Σₐ wₐ S_{a,k}] (`add_basis_row` with dir = weight·n_k,
+    /// from the rows stored along the normals). Accumulating, so that a band's rows sum in one
+    /// pass per node.
+    pub fn add_normal_basis_row(&self, flank: Flank, st: &Stencil, node: usize, weight: f64, out: &mut [f64]) {
         let rows = self.flank(flank);
         let n_k = self.modes();
         let (phi_part, shape_part) = out.split_at_mut(n_k);
-        phi_part.copy_from_slice(rows.phi_normal_row(node));
-        shape_part.fill(0.0);
+        for (o, r) in phi_part.iter_mut().zip(rows.phi_normal_row(node)) {
+            *o += weight * r;
+        }
         for a in 0..4 {
-            let w = st.weights.w[a];
+            let w = weight * st.weights.w[a];
             if w != 0.0 {
                 for (o, r) in shape_part.iter_mut().zip(rows.shape_normal_row(st.a0 + a, node)) {
                     *o += w * r;

@@ -183,7 +183,6 @@ pub fn penalty_contact_loads(
             model,
             place,
             poses,
-            restage,
             super::contact::Loading::Point,
             0.0,
             false,
@@ -258,24 +257,27 @@ pub fn penalty_contact_loads(
                 });
                 // Generalized forces on η: −F·∂α/∂η, the slave node along its own normal, the
                 // master point along the interpolated one.
+                tmp.iter_mut().for_each(|t| t.fill(0.0));
                 let mut load = |i: usize, node: usize, share: f64, normal: Option<[f64; 3]>| {
                     let g = &model.gears[i];
                     match normal {
-                        Some(n) => g.basis_row(Flank::Drive, &poses[i].stencil, node, n, &mut tmp[i]),
-                        None => g.normal_basis_row(Flank::Drive, &poses[i].stencil, node, &mut tmp[i]),
-                    }
-                    for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
-                        *f -= force * share * t;
-                    }
-                    if let Some(section) = section.as_mut() {
-                        for (r, t) in section.rows[i][1..].iter_mut().zip(&tmp[i]) {
-                            *r += share * t;
+                        Some(n) => {
+                            g.add_basis_row(Flank::Drive, &poses[i].stencil, node, n.map(|c| share * c), &mut tmp[i])
                         }
+                        None => g.add_normal_basis_row(Flank::Drive, &poses[i].stencil, node, share, &mut tmp[i]),
                     }
                 };
                 load(slave, k, 1.0, None);
                 for &(node, share) in &hit.master_shares {
                     load(master, node, share, Some(hit.master_normal));
+                }
+                for i in 0..2 {
+                    for (f, t) in out.force[i][1..].iter_mut().zip(&tmp[i]) {
+                        *f -= force * t;
+                    }
+                    if let Some(section) = section.as_mut() {
+                        section.rows[i][1..].copy_from_slice(&tmp[i]);
+                    }
                 }
                 for i in 0..2 {
                     out.force[i][0] -= force * alpha_slope[i];
