@@ -43,7 +43,7 @@ pub struct GearPose<'a> {
 }
 
 /// What the contact puts on the pair.
-#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Default)]
 pub struct ContactLoads {
     /// Generalized forces on (θᵢ, ηᵢ), per gear.
     pub force: [Vec<f64>; 2],
@@ -70,7 +70,7 @@ pub struct ContactLoads {
 /// One loaded section: its elastic force, its Hertz tangent stiffness and the row through
 /// which its force enters each gear's coordinates — what the mesh damper reads (on θ and η_Φ)
 /// and what the quasi-static condensation's tangent stiffness Σ k_s·r rᵀ is made of.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone)]
 pub struct SectionRows {
     pub flank_sign: f64,
     pub force_n: f64,
