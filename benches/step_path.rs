@@ -1,7 +1,7 @@
 //! What one PMOR-Hertz doStep costs at operating speed, and what of it is the integration
 //! (issue 39), measured in release mode:
 //!
-//!     cargo bench --bench step_path [-- FMU ... [--torque-nm=T]]
+//!     cargo bench --bench step_path [-- FMU ... [--torque-nm=T] [--inertia-factor=F]]
 //!
 //! (default: out/KurokawaSpur.fmu out/SmallHelical.fmu). The case is issue 38's brake case: both
 //! gears start at synchronous speed, gear 1 carries T₁ (`--torque-nm`, else the pair's operating
@@ -90,15 +90,19 @@ struct Run {
 /// The brake case run both ways in lockstep: at each communication step one fmi2DoStep through
 /// the C entry points, then one `advance` of the dynamics kept beside it, each fed back from its
 /// own ω₂. Timed one right after the other, the pair shares the machine's state (clock,
-/// caches, a neighbour's load): their difference is the doStep's own cost.
-fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64) -> Result<Run, String> {
+/// caches, a neighbour's load): their difference is the doStep's own cost. Each gear's
+/// `inertia_i` is `inertia_factor` times its FE value (1: the FMU's default; 2: a gear on a
+/// shaft, the real-time table's "×2").
+fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64, inertia_factor: f64) -> Result<Run, String> {
     let ModelKind::PmorHertz(model) = &u.file.model else { return Err("not a PMOR-Hertz FMU".into()) };
     let (omega, brake) = brake_case(pair, mesh_hz);
     // The integration alone: one dynamics object for the whole run, as the FMU's defaults make it.
     let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(&model.pair);
     let damping = model.damping(model.modal_damping_ratio, model.shape_damping_ratio);
-    let mut dynamics = PmorDynamics::new(model, &place, damping, [0.0; 2]);
-    let inertia = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+    let fe_inertia = [model.gears[0].polar_inertia_kgm2, model.gears[1].polar_inertia_kgm2];
+    let inertia = fe_inertia.map(|j| inertia_factor * j);
+    let added = [inertia[0] - fe_inertia[0], inertia[1] - fe_inertia[1]];
+    let mut dynamics = PmorDynamics::new(model, &place, damping, added);
     dynamics.mesh_damping_n_s_per_m = model.mesh_damper_n_s_per_m(model.pair.mesh_damping_ratio, inertia);
     let mut s = dynamics.start_state([0.0; 2], omega, [pair.torque_1_nm, -brake * omega[1]])?;
     let counts = |d: &PmorDynamics| d.condensed().map_or((0, 0), |q| q.counts.get());
@@ -130,9 +134,9 @@ fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64) -> Result<Run, Stri
     let result = (|| {
         ok(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), "fmi2SetupExperiment")?;
         ok(fmi2EnterInitializationMode(c), "fmi2EnterInitializationMode")?;
-        let start = [vr("w_1_start"), vr("w_2_start"), vr("tau_1"), vr("tau_2")];
-        let values = [omega[0], omega[1], pair.torque_1_nm, -brake * omega[1]];
-        ok(fmi2SetReal(c, start.as_ptr(), 4, values.as_ptr()), "fmi2SetReal")?;
+        let start = [vr("w_1_start"), vr("w_2_start"), vr("tau_1"), vr("tau_2"), vr("inertia_1"), vr("inertia_2")];
+        let values = [omega[0], omega[1], pair.torque_1_nm, -brake * omega[1], inertia[0], inertia[1]];
+        ok(fmi2SetReal(c, start.as_ptr(), 6, values.as_ptr()), "fmi2SetReal")?;
         ok(fmi2ExitInitializationMode(c), "fmi2ExitInitializationMode")?;
         let (inputs, w2_ref) = ([vr("tau_1"), vr("tau_2")], vr("w_2"));
         let n = (END_S / h).round() as usize;
@@ -181,10 +185,15 @@ fn main() {
     let mut fmus: Vec<PathBuf> = args.iter().filter(|a| a.ends_with(".fmu")).map(PathBuf::from).collect();
     let torque_nm: Option<f64> =
         args.iter().find_map(|a| a.strip_prefix("--torque-nm=")).map(|t| t.parse().expect("--torque-nm=T: T₁ in N·m"));
+    let inertia_factor: f64 = args
+        .iter()
+        .find_map(|a| a.strip_prefix("--inertia-factor="))
+        .map_or(1.0, |t| t.parse().expect("--inertia-factor=F: inertia_i over the FE value"));
     if fmus.is_empty() {
         fmus = vec![root.join("out/KurokawaSpur.fmu"), root.join("out/SmallHelical.fmu")];
     }
     println!("T₁: {}", torque_nm.map_or("each pair's operating torque".to_string(), |t| format!("{t} N·m")));
+    println!("inertia_i: {inertia_factor} × the FE value");
     println!(
         "| FMU | mesh frequency | coupling | µs per doStep (C API) | µs per advance | overhead µs | internal steps | solves | evaluations | µs per solve | µs per evaluation | real-time factor (C API) |"
     );
@@ -207,7 +216,9 @@ fn main() {
         };
         let name = fmu.file_stem().and_then(|s| s.to_str()).unwrap_or("?");
         for (mesh_hz, h) in CASES {
-            let row = (0..ROUNDS).map(|_| lockstep(&u, &pair, mesh_hz, h)).collect::<Result<Vec<Run>, String>>();
+            let row = (0..ROUNDS)
+                .map(|_| lockstep(&u, &pair, mesh_hz, h, inertia_factor))
+                .collect::<Result<Vec<Run>, String>>();
             let row = row.map(|runs| {
                 let all = |f: fn(&Run) -> &Vec<f64>| median(runs.iter().flat_map(|r| f(r).iter().copied()).collect());
                 let differences = median(

@@ -146,7 +146,10 @@ pub struct GearSplit {
     slow_map: SlowMap,
     /// Qᵀ(M_ΦΦ − bbᵀ/J)Q, the slow mass on ξ, and its Cholesky factor.
     pub xi_mass: DMatrix<f64>,
-    pub(super) xi_mass_factor: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    /// M_ξ⁻¹, made once per split from its Cholesky factor: the step path applies it as a dense
+    /// product (issue 39: nalgebra's triangular solves, column by column, took a third of a doStep
+    /// with `inertia_i` at twice the FE value, where M_ξ is not the identity).
+    pub(super) xi_mass_inverse: DMatrix<f64>,
     /// Whether that mass is the identity to round-off (Φ mass-normalized: measured ≤ 1e-14 on
     /// the example pairs), so the accelerations are the forces themselves.
     pub(super) xi_mass_is_unit: bool,
@@ -248,6 +251,7 @@ impl GearSplit {
         };
         let root = DMatrix::from_diagonal(&DVector::from_iterator(n_k, gear.eigenvalues.iter().map(|l| l.sqrt())));
         let slow_body_acceleration_damping_root = xi_mass_factor.solve(&(basis.transpose() * root * &basis));
+        let xi_mass_inverse = xi_mass_factor.inverse();
         let split = GearSplit {
             slow_body_acceleration_stiffness,
             slow_body_acceleration_damping_root,
@@ -262,7 +266,7 @@ impl GearSplit {
             basis,
             slow_map,
             xi_mass,
-            xi_mass_factor,
+            xi_mass_inverse,
             xi_mass_is_unit,
             hub_frequency_hz,
             cutoff_hz,
@@ -384,7 +388,7 @@ impl GearSplit {
     /// ξ̈ = M_ξ⁻¹·f_ξ, in place.
     pub(super) fn xi_acceleration(&self, force: &mut DVector<f64>) {
         if !self.xi_mass_is_unit {
-            self.xi_mass_factor.solve_mut(force);
+            *force = &self.xi_mass_inverse * &*force;
         }
     }
 

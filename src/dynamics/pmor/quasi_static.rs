@@ -728,8 +728,8 @@ impl<'a> PmorDynamics<'a> {
             let n = l.n_q[i];
             a.row_mut(q).scale_mut(1.0 / sp.inertia_kgm2);
             if !sp.xi_mass_is_unit {
-                let mut block = a.rows_mut(q + 1, n - 1);
-                sp.xi_mass_factor.solve_mut(&mut block);
+                let solved = &sp.xi_mass_inverse * a.rows(q + 1, n - 1);
+                a.rows_mut(q + 1, n - 1).copy_from(&solved);
             }
         }
     }
