@@ -30,10 +30,10 @@ def floats(text: str) -> list[float]:
     return [float(x) for x in text.split(",") if x]
 
 
-def substeps(fmu: Fmu, mesh_hz: float, step_s: float) -> int:
+def substeps(fmu: Fmu, mesh_hz: float, step_s: float, max_step: float) -> int:
     """The FMU's internal steps per doStep at this speed: ⌈h / min(max_step, Δϑ/(2ω))⌉ with
-    Δϑ = pitch / n_θ (PMOR-Hertz; the lumped FMU has no speed bound)."""
-    max_step = fmu.start.get("max_step") or fmu.get("max_step")[0]
+    Δϑ = pitch / n_θ (PMOR-Hertz; the lumped FMU has no speed bound) and max_step the instance's
+    own after initialization (inertias above the FE values may shorten it)."""
     bound = max_step
     if not fmu.lumped and fmu.samples_per_pitch:
         z1, _ = fmu.teeth
@@ -68,7 +68,8 @@ def main() -> int:
                     r = brake_case(fmu, mesh_hz, step_us * 1e-6, torque_nm, t_end_s=args.t_end,
                                    parameters=params)
                     failed += not r["completed"]
-                    n = substeps(fmu, mesh_hz, step_us * 1e-6)
+                    max_step = r.get("max_step_s") or fmu.start.get("max_step") or fmu.get("max_step")[0]
+                    n = substeps(fmu, mesh_hz, step_us * 1e-6, max_step)
                     print(f"{path.rsplit('/', 1)[-1]:<28} {mesh_hz:7.0f} {step_us:5.0f} {'×2' if doubled else 'FE':>8} "
                           f"{'yes' if r['completed'] else 'NO':>3} {r['us_per_doStep']:9.0f} {n:12d} "
                           f"{r['real_time_factor']:7.2f}" + (f"  {r['error'][:120]}" if r["error"] else ""),

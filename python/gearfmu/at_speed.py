@@ -83,6 +83,8 @@ def brake_case(fmu: Fmu, mesh_frequency_hz: float, step_s: float, torque_1_nm: f
     wall = 0.0
     try:
         fmu.initialize({**(parameters or {}), "w_1_start": omega_1, "w_2_start": omega_2})
+        # The instance's own default step (its parameters may shorten the build's).
+        result["max_step_s"] = float(fmu.fmu.getReal([fmu.vr["max_step"]])[0])
         w_2 = omega_2
         refs_in = [fmu.vr["tau_1"], fmu.vr["tau_2"]]
         refs_out = [fmu.vr["w_2"], fmu.vr["dte"]]
