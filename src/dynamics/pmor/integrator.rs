@@ -198,7 +198,7 @@ impl BodyIteration {
 /// with the mesh.
 enum NewtonMatrix {
     Bodies(BodyIteration),
-    Factored(nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>),
+    WithMesh(std::rc::Rc<MeshNewton>),
 }
 
 impl NewtonMatrix {
@@ -206,9 +206,20 @@ impl NewtonMatrix {
         match self {
             NewtonMatrix::Bodies(p) => p.apply(residual),
             // Invertible by construction (`discrete_gradient_matrix_with_mesh`).
-            NewtonMatrix::Factored(lu) => lu.solve(residual).unwrap_or_else(|| residual.clone()),
+            NewtonMatrix::WithMesh(m) => m.factor.solve(residual).unwrap_or_else(|| residual.clone()),
         }
     }
+}
+
+/// Newton's matrix with the mesh, LU-factored, and what it is made of, as a step's predictor
+/// made it: kept for the next steps of the call while they converge as fast (at most two
+/// solves) with the same step and as many loaded sections — the mesh's stiffness changes little
+/// from one step to the next, and the matrix only sets how fast Newton converges, not where.
+struct MeshNewton {
+    factor: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    parts: StepJacobian<'static>,
+    step_s: f64,
+    sections: usize,
 }
 
 /// −∂a/∂q and −∂a/∂q̇ of the slow accelerations at a step's predictor (the bodies', and the
@@ -240,6 +251,8 @@ struct StepStart {
     dy: Vec<f64>,
     outputs: super::PmorOutputs,
     history: AccelerationHistory,
+    /// The last step's Newton matrix with the mesh, where the next may take it (`MeshNewton`).
+    newton: Option<std::rc::Rc<MeshNewton>>,
 }
 
 /// The slow accelerations at the starts of the last two steps of a call, most recent first,
@@ -325,7 +338,7 @@ impl<'a> PmorDynamics<'a> {
             Some(f) => f,
             None => self.rhs(&y, s.anchor, torques)?,
         };
-        let mut start = StepStart { dy, outputs, history: AccelerationHistory::default() };
+        let mut start = StepStart { dy, outputs, history: AccelerationHistory::default(), newton: None };
         for _ in 0..n {
             self.discrete_gradient_step(qs, s, &mut y, &mut start, torques, h, 0)?;
             self.end_discrete_gradient_step(s, &mut y, &mut start, torques)?;
@@ -353,7 +366,8 @@ impl<'a> PmorDynamics<'a> {
             let len = y.len();
             y[len - 2] +=
                 torques[0] * (outputs.bore_theta[0] - before[0]) + torques[1] * (outputs.bore_theta[1] - before[1]);
-            *start = StepStart { dy, outputs, history: std::mem::take(&mut start.history) };
+            *start =
+                StepStart { dy, outputs, history: std::mem::take(&mut start.history), newton: start.newton.take() };
         }
         Ok(())
     }
@@ -419,12 +433,14 @@ impl<'a> PmorDynamics<'a> {
         // Newton's matrix, made at the first iterate (the mesh's stiffness at the predictor),
         // and what it is made of.
         let mut newton = None;
-        let mut jacobian: Option<StepJacobian> = None;
+        let mut bodies_jacobian: Option<StepJacobian> = None;
         let mut residual = nalgebra::DVector::zeros(n_q);
         let mut converged = None;
         // The last iterate's energy change |f̄·Δq| and its loaded sections (the stopping rule).
         let mut previous: Option<(f64, usize)> = None;
+        let mut iterations = 0;
         for iteration in 0..DISCRETE_GRADIENT_ITERATIONS {
+            iterations = iteration + 1;
             // The predictor's solve may end looser: the iterations after it solve again.
             qs.at_predictor.set(iteration == 0);
             qs.last_solve_tight.set(true);
@@ -433,18 +449,32 @@ impl<'a> PmorDynamics<'a> {
             let Ok((next, end)) = rhs else { break };
             if iteration == 0 {
                 // The mesh's stiffness and damper at the predictor join the bodies' for this
-                // step; out of contact the bodies' alone, kept per step length.
-                (newton, jacobian) = match self.discrete_gradient_matrix_with_mesh(qs, h) {
-                    Some((factor, parts)) => (Some(NewtonMatrix::Factored(factor)), Some(parts)),
-                    None => (
-                        self.discrete_gradient_matrix(qs, h).map(NewtonMatrix::Bodies),
-                        Some(StepJacobian {
+                // step (or the last step's, `MeshNewton`); out of contact the bodies' alone,
+                // kept per step length.
+                let sections = end.contact.sections.len();
+                let kept = start.newton.take().filter(|m| m.step_s == h && m.sections == sections && sections > 0);
+                let with_mesh = kept.or_else(|| {
+                    self.discrete_gradient_matrix_with_mesh(qs, h)
+                        .map(|(factor, parts)| std::rc::Rc::new(MeshNewton { factor, parts, step_s: h, sections }))
+                });
+                newton = match with_mesh {
+                    Some(m) => {
+                        start.newton = Some(m.clone());
+                        Some(NewtonMatrix::WithMesh(m))
+                    }
+                    None => {
+                        bodies_jacobian = Some(StepJacobian {
                             stiffness: std::borrow::Cow::Borrowed(body_stiffness),
                             damping: std::borrow::Cow::Borrowed(body_damping),
-                        }),
-                    ),
+                        });
+                        self.discrete_gradient_matrix(qs, h).map(NewtonMatrix::Bodies)
+                    }
                 };
             }
+            let jacobian = match &newton {
+                Some(NewtonMatrix::WithMesh(m)) => Some(&m.parts),
+                _ => bodies_jacobian.as_ref(),
+            };
             let m_a1 = mass(&next[n_q..2 * n_q]);
             let dq: Vec<f64> = (0..n_q).map(|k| trial[k] - q0[k]).collect();
             let norm2 = dot(&dq, &mass(&dq));
@@ -481,7 +511,7 @@ impl<'a> PmorDynamics<'a> {
             let sections = end.contact.sections.len();
             let rate =
                 previous.and_then(|(before, n)| (n == sections && change < 0.5 * before).then(|| change / before));
-            if let (true, Some(rate), Some(parts)) = (tight, rate, jacobian.as_ref()) {
+            if let (true, Some(rate), Some(parts)) = (tight, rate, jacobian) {
                 if rate / (1.0 - rate) * change <= DISCRETE_GRADIENT_FOLLOW_SHARE * tolerance {
                     let (next, end) =
                         self.follow_newton_move(qs, parts, y, &mut trial, &shift, next, end, torques, h)?;
@@ -497,6 +527,10 @@ impl<'a> PmorDynamics<'a> {
                 trial[k] += shift[k];
                 trial[n_q + k] = 2.0 * (trial[k] - q0[k]) / h - v0[k];
             }
+        }
+        // A step that needed more than two solves makes the next one build its own matrix.
+        if converged.is_none() || iterations > 2 {
+            start.newton = None;
         }
         let Some((mut next, end, dq)) = converged else {
             if halvings >= DISCRETE_GRADIENT_HALVINGS {
