@@ -513,6 +513,24 @@ pub(super) struct FastTangent {
     pub(super) woodbury: std::cell::OnceCell<(Vec<DVector<f64>>, nalgebra::Cholesky<f64, nalgebra::Dyn>)>,
 }
 
+/// Adds to `force` the fast coordinates' load of a slow move x through the loaded sections,
+/// −Σ_s k_s·g_s·(r_s·x) (r_s a section's row in the slow positions, g_s in the fast
+/// coordinates, k_s its Hertz stiffness): what the fast tangent turns into their move with the
+/// slow one, K·Δz = that load (the implicit function theorem). The prediction of a solve's
+/// start, the fast coordinates' rate and the move a Newton step takes without a solve share it.
+pub(super) fn add_fast_load_of_slow_move(
+    fast_rows: &[DVector<f64>],
+    stiffness: &[f64],
+    slow_rows: &[Vec<f64>],
+    x: &[f64],
+    force: &mut DVector<f64>,
+) {
+    for ((g, k), r) in fast_rows.iter().zip(stiffness).zip(slow_rows) {
+        let approach: f64 = r.iter().zip(x).map(|(r, x)| r * x).sum();
+        force.axpy(-k * approach, g, 1.0);
+    }
+}
+
 impl FastTangent {
     pub(super) fn new() -> Self {
         FastTangent { body: Vec::new(), shapes: Vec::new(), woodbury: std::cell::OnceCell::new() }

@@ -342,14 +342,14 @@ pub fn section_contact_loads(
     let spur = p.base_helix_angle_rad == 0.0;
     let mut band_row = [vec![0.0; n_e[0]], vec![0.0; n_e[1]]];
     for &flank in flanks {
-        // The flank nodes read at the poses (the tip corners' differences read them too).
-        let mut nodes = [NodeDisplacements::new(), NodeDisplacements::new()];
         let searched = place.searched_angles(flank, theta);
         let reach: f64 =
             (0..2).map(|i| model.gears[i].flank_displacement_bound(flank, &poses[i].stencil, poses[i].eta)).sum();
         if !place.flank_can_close(flank, theta, reach) {
             continue; // backed off beyond the deformation's reach (the coast flanks, mostly)
         }
+        // The flank nodes read at the poses (the tip corners' differences read them too).
+        let mut nodes = [NodeDisplacements::new(), NodeDisplacements::new()];
         for j in place.candidate_pairs(searched[1]) {
             let mut pair_force = 0.0;
             // A spur pair's sections differ only in z, which its contact search does not read

@@ -343,10 +343,8 @@ impl<'a> PmorDynamics<'a> {
                     force[offset + c] -= turn[c] * (torques[i] - p.torques[i]);
                 }
             }
-            for ((g, k), r) in p.fast_rows.iter().zip(&p.stiffness).zip(&p.slow_rows) {
-                let approach: f64 = r.iter().zip(positions).zip(&p.positions).map(|((r, y), y0)| r * (y - y0)).sum();
-                force.axpy(-k * approach, g, 1.0);
-            }
+            let moved: Vec<f64> = positions.iter().zip(&p.positions).map(|(y, y0)| y - y0).collect();
+            add_fast_load_of_slow_move(&p.fast_rows, &p.stiffness, &p.slow_rows, &moved, &mut force);
             let dz = p.tangent.solve(&force, &p.fast_rows, &p.stiffness)?;
             let n0 = z[0].len();
             z[0].iter_mut().enumerate().for_each(|(k, v)| *v += dz[k]);
@@ -523,10 +521,7 @@ impl<'a> PmorDynamics<'a> {
         let n_z0 = qs.fast.borrow()[0].len();
         let n_z = e.residual.len();
         let mut force = DVector::zeros(n_z);
-        for ((g, k), r) in e.fast_rows.iter().zip(&stiffness).zip(slow_rows) {
-            let approach_rate: f64 = r.iter().zip(velocity).map(|(r, v)| r * v).sum();
-            force.axpy(-k * approach_rate, g, 1.0);
-        }
+        add_fast_load_of_slow_move(&e.fast_rows, &stiffness, slow_rows, velocity, &mut force);
         let rate = tangent.solve(&force, &e.fast_rows, &stiffness)?;
         // The damping forces on the fast coordinates (the sign of D·q̇): the bodies' from the
         // slow rates, then what follows.
@@ -777,13 +772,11 @@ impl<'a> PmorDynamics<'a> {
         let mut fast = qs.fast.borrow_mut();
         let n0 = fast[0].len();
         let mut force = DVector::zeros(n0 + fast[1].len());
-        let slow_approach: Vec<f64> =
-            p.slow_rows.iter().map(|r| r.iter().zip(dq).map(|(r, d)| r * d).sum::<f64>()).collect();
-        for ((g, k), a) in p.fast_rows.iter().zip(&p.stiffness).zip(&slow_approach) {
-            force.axpy(-k * a, g, 1.0);
-        }
+        add_fast_load_of_slow_move(&p.fast_rows, &p.stiffness, &p.slow_rows, dq, &mut force);
         let dz = p.tangent.solve(&force, &p.fast_rows, &p.stiffness)?;
-        let approach = p.fast_rows.iter().zip(&slow_approach).map(|(g, a)| a + g.dot(&dz)).collect();
+        let approach = (p.slow_rows.iter().zip(&p.fast_rows))
+            .map(|(r, g)| r.iter().zip(dq).map(|(r, d)| r * d).sum::<f64>() + g.dot(&dz))
+            .collect();
         for i in 0..2 {
             let offset = if i == 0 { 0 } else { n0 };
             fast[i].iter_mut().enumerate().for_each(|(k, z)| *z += dz[offset + k]);
