@@ -703,17 +703,21 @@ fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCas
             field_f64(m.omega_2),
             field_f64(m.input_work_j),
             field_f64(m.dissipated_j),
+            field_f64(m.friction_dissipated_j),
         )
-            .prop_map(|(theta_1, omega_1, theta_2, omega_2, input_work_j, dissipated_j)| {
-                gearfmu::dynamics::lumped::LumpedState {
-                    theta_1,
-                    omega_1,
-                    theta_2,
-                    omega_2,
-                    input_work_j,
-                    dissipated_j,
-                }
-            })
+            .prop_map(
+                |(theta_1, omega_1, theta_2, omega_2, input_work_j, dissipated_j, friction_dissipated_j)| {
+                    gearfmu::dynamics::lumped::LumpedState {
+                        theta_1,
+                        omega_1,
+                        theta_2,
+                        omega_2,
+                        input_work_j,
+                        dissipated_j,
+                        friction_dissipated_j,
+                    }
+                },
+            )
     };
     (
         (field_f64(s.torques_nm[0]), field_f64(s.torques_nm[1])),
@@ -724,10 +728,12 @@ fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCas
             field_f64(s.params.inertia_1_kgm2),
             field_f64(s.params.inertia_2_kgm2),
             field_f64(s.params.mesh_damping_ratio),
+            field_f64(s.params.friction_coefficient),
+            field_f64(s.params.sliding_regularization_m_per_s),
         ),
         (field_f64(real.time), prop_oneof![Just(None), hostile_f64().prop_map(Some)], any_phase()),
     )
-        .prop_map(move |(tau, start, mech, max_step_s, (i1, i2, z), (time, stop_time, phase))| {
+        .prop_map(move |(tau, start, mech, max_step_s, (i1, i2, z, mu, eps), (time, stop_time, phase))| {
             let mut state = s.clone();
             state.torques_nm = [tau.0, tau.1];
             state.start = start;
@@ -736,6 +742,8 @@ fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCas
             state.params.inertia_1_kgm2 = i1;
             state.params.inertia_2_kgm2 = i2;
             state.params.mesh_damping_ratio = z;
+            state.params.friction_coefficient = mu;
+            state.params.sliding_regularization_m_per_s = eps;
             StateCase::Forged(Box::new(Snapshot { state, time, stop_time, phase }))
         })
 }

@@ -454,8 +454,8 @@ fn fe_fed_mesh_law_reproduces_the_pmor_hertz_statics() {
     let levels = force_levels(&p, FORCE_LEVELS);
     let table = drive_law_from_statics(&p, &reduced.static_model().unwrap(), &levels, TABLE_ROWS, |_| {}).unwrap();
     assert_eq!(table.capped, None, "the statics solve every level up to the top");
-    let (law, pairs) = (table.law, table.pairs);
-    let fe = LumpedMesh::from_drive_law(&p, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, law, pairs);
+    let (law, pairs, spread) = (table.law, table.pairs, table.spread);
+    let fe = LumpedMesh::from_drive_law(&p, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, law, pairs, spread);
     let analytic = lumped(&p);
     let (rb1, roll_offset) = (p.gear1.base_radius_m, fe.roll_offset_m);
     for torque in [22.0, 185.0, 370.0] {

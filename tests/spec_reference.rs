@@ -7,7 +7,9 @@
 
 use gearfmu::fe::gear_mesh::{MeshSpec, ProfileGrading};
 use gearfmu::gear::modification::{ModificationSpec, ReliefShape};
-use gearfmu::gear::spec::{GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec};
+use gearfmu::gear::spec::{
+    FrictionSpec, GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec,
+};
 use gearfmu::gear::{HertzContact, PairSpec};
 
 fn gear(teeth: i64) -> GearSpec {
@@ -64,6 +66,7 @@ fn full_spec() -> PairSpec {
         gear2: gear(31),
         lumped: LumpedSpec { hertz_contact: HertzContact::Weber },
         operating: OperatingSpec { torque_nm: Some(250.0) },
+        friction: FrictionSpec { coefficient: 0.05 },
         mesh: MeshSpec {
             elements_across_tooth: 4,
             elements_along_profile: 8,

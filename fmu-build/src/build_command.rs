@@ -76,6 +76,15 @@ pub(crate) fn build(
             spec.display()
         );
     }
+    if !matches!(model, ModelChoice::Lumped) && pair.friction_coefficient != 0.0 {
+        anyhow::bail!(
+            "{}: friction.coefficient = {}: tooth friction is not in the PMOR-Hertz dynamics yet (issue 42). \
+             Build the lumped FMU, which carries it (`--model lumped`; its mesh law and friction contacts come \
+             from the same FE statics), or set it to 0",
+            spec.display(),
+            pair.friction_coefficient
+        );
+    }
     let so = library_bytes(library)?;
     match model {
         ModelChoice::Lumped => {
@@ -181,7 +190,13 @@ pub(crate) fn lumped_from_table(pair: &GearPair, table: gearfmu::rom::static_mes
     if let Some(why) = &table.capped {
         println!("note: {why}; beyond it the law continues with its last slope");
     }
-    LumpedMesh::from_drive_law(pair, gearfmu::dynamics::lumped::MeshLawSource::FeStatics, table.law, table.pairs)
+    LumpedMesh::from_drive_law(
+        pair,
+        gearfmu::dynamics::lumped::MeshLawSource::FeStatics,
+        table.law,
+        table.pairs,
+        table.spread,
+    )
 }
 
 /// The offline PMOR-Hertz build: FE models, eigenmodes, static contact shapes, invariants.

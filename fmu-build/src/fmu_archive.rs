@@ -51,6 +51,7 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
                 ("inertia_2", mesh.inertia_2_kgm2),
                 ("mesh_damping_ratio", mesh.mesh_damping_ratio),
                 ("max_step", gearfmu::fmu::gear_pair::LUMPED_DEFAULT_MAX_STEP_S),
+                ("friction_coefficient", mesh.friction_coefficient),
             ],
             format!(
                 "Gear pair {} (z {}/{}), lumped model: rigid gears, {}, backlash",
@@ -71,6 +72,7 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
                 ("inertia_2", m.gears[1].polar_inertia_kgm2),
                 ("mesh_damping_ratio", m.pair.mesh_damping_ratio),
                 ("max_step", m.max_step_s),
+                ("friction_coefficient", 0.0),
             ],
             format!(
                 "Gear pair {} (z {}/{}), {}: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), {}",

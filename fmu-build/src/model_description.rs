@@ -187,7 +187,13 @@ mod tests {
     use gearfmu::fmu::gear_pair::Var;
 
     fn xml() -> String {
-        let starts = [("inertia_1", 1.0), ("inertia_2", 2.0), ("mesh_damping_ratio", 0.05), ("max_step", 1e-5)];
+        let starts = [
+            ("inertia_1", 1.0),
+            ("inertia_2", 2.0),
+            ("mesh_damping_ratio", 0.05),
+            ("max_step", 1e-5),
+            ("friction_coefficient", 0.05),
+        ];
         let facts = ModelFacts {
             model_name: "Test",
             guid: "{x}",

@@ -59,6 +59,21 @@ pub fn gear_loss_factor(pair: &GearPair) -> Result<f64, String> {
         * (1.0 - e_alpha + e1 * e1 + e2 * e2))
 }
 
+/// The gear loss factor for a load spread evenly over the path of contact (per unit length of
+/// the line of action), the limit a helical pair with ε_β ≥ 1 approaches as its inclined contact
+/// lines sweep the plane of action: the same ISO normalization, with the mean of |u − C| over
+/// A…E, (AC² + CE²)/(2·AE), in place of H_V's spur sharing. H_V,uniform = π(u + 1)/(z₁·u·cos β_b)
+/// · (ε₁² + ε₂²)/ε_α: equal to H_V at ε_α = 1 (one pair carries it all), above it otherwise
+/// (H_V's pairs share the double-contact zones' load by halves, which puts less of it at the
+/// path's ends, where the arm is longest). Derived here, not ISO's.
+pub fn gear_loss_factor_uniform_load(pair: &GearPair) -> f64 {
+    let [e1, e2] = addendum_contact_ratios(pair);
+    let u = pair.gear2.teeth as f64 / pair.gear1.teeth as f64;
+    std::f64::consts::PI * (u + 1.0) / (pair.gear1.teeth as f64 * u * pair.base_helix_angle_rad.cos())
+        * (e1 * e1 + e2 * e2)
+        / (e1 + e2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -208,6 +223,34 @@ mod tests {
             }
             let mean = sum / positions as f64 / (w1 * p.gear1.base_radius_m);
             assert!((mean / h_v - 1.0).abs() < 1e-4, "{}: mean {mean} against H_V {h_v}", p.name);
+        }
+    }
+
+    /// The uniform-load factor against the loss it averages (evidence: the loss integrated over
+    /// the path with an even load per unit length, 20 000 points), and against H_V where they
+    /// must agree (a path one base pitch long: one pair carries all).
+    #[test]
+    fn the_uniform_load_factor_is_the_path_mean_of_the_sliding_loss() {
+        for p in examples() {
+            let (w1, w2) = (1.0, p.gear1.teeth as f64 / p.gear2.teeth as f64);
+            let points = 20_000;
+            let length = p.path_end_m - p.path_start_m;
+            let mean_sliding = (0..points)
+                .map(|k| {
+                    let u = p.path_start_m + length * (k as f64 + 0.5) / points as f64;
+                    sliding_velocity_m_per_s(&p, u, w1, w2).abs()
+                })
+                .sum::<f64>()
+                / points as f64;
+            let mean = mean_sliding / p.base_helix_angle_rad.cos() / (w1 * p.gear1.base_radius_m);
+            let uniform = gear_loss_factor_uniform_load(&p);
+            assert!((mean / uniform - 1.0).abs() < 1e-4, "{}: mean {mean} against {uniform}", p.name);
+            let c = p.pitch_point_m();
+            // ε_α = 1 + 1e-9 (H_V's range starts at 1, which rounding could miss).
+            let one_pitch =
+                GearPair { path_start_m: c - 0.4 * p.base_pitch_m, path_end_m: c + (0.6 + 1e-9) * p.base_pitch_m, ..p };
+            let (a, b) = (gear_loss_factor_uniform_load(&one_pitch), gear_loss_factor(&one_pitch).unwrap());
+            assert!((a / b - 1.0).abs() < 1e-8, "{a} vs {b}");
         }
     }
 

@@ -26,6 +26,7 @@
 
 use crate::contact::hertz::{series_force, ApproachLaw, Body, LineContact};
 use crate::dynamics::lumped::{LumpedMesh, MeshLawSource};
+use crate::dynamics::mesh_friction::ContactSpread;
 use crate::dynamics::mesh_law::MeshLaw;
 use crate::gear::{Gear, GearPair, HertzContact};
 use rayon::prelude::*;
@@ -158,6 +159,8 @@ impl PathTables {
 
 /// One axial slice of one tooth pair in contact: a Hertz line contact in series with the teeth.
 struct SliceContact {
+    /// Where it touches: m from T₁ along the transverse line of action.
+    u_m: f64,
     contact: LineContact,
     structural_compliance: f64,
     /// Yang & Lin's constant contact compliance for this slice, when the spec asks for it.
@@ -219,6 +222,7 @@ fn slices_in_contact(
                 reference_depth_m: depth,
             };
             out.push(SliceContact {
+                u_m: u,
                 contact: LineContact {
                     length_m: length,
                     bodies: [body(rho1, tables.at(&tables.depth_1, u)), body(rho2, tables.at(&tables.depth_2, u))],
@@ -261,17 +265,20 @@ pub const DEFLECTION_ITERATIONS: usize = 200;
 
 /// The static mesh: at each roll position ξᵢ = i·p_b/N, the mesh deflection δ under each force
 /// level (load shared among all slices in contact, each a Hertz contact in series with the
-/// teeth), and the number of tooth pairs in contact. Parallel over rows.
+/// teeth), the number of tooth pairs in contact, and where the load is carried along the line of
+/// action (what tooth friction acts on, `mesh_friction`). Parallel over rows.
 pub fn static_deflection_table(
     pair: &GearPair,
     levels: &[f64],
     samples: usize,
     axial_slices: usize,
-) -> Result<(MeshLaw, Vec<u32>), String> {
+) -> Result<(MeshLaw, Vec<u32>, ContactSpread), String> {
     let tables = PathTables::new(pair);
     let cos_bb = pair.base_helix_angle_rad.cos();
     let linear_hertz = linearized_hertz_compliance_per_width(pair.youngs_modulus_pa, pair.poisson_ratio);
-    let rows: Vec<Result<(Vec<f64>, u32), String>> = (0..samples)
+    // Per row: its deflections, its pairs in contact, and each level's contacts (force, u).
+    type Row = (Vec<f64>, u32, Vec<Vec<(f64, f64)>>);
+    let rows: Vec<Result<Row, String>> = (0..samples)
         .into_par_iter()
         .map(|i| {
             let roll = pair.base_pitch_m * i as f64 / samples as f64;
@@ -285,6 +292,7 @@ pub fn static_deflection_table(
                 .map(|s| cos_bb * cos_bb / (s.structural_compliance + linear_hertz / s.contact.length_m))
                 .sum();
             let mut row = vec![0.0; levels.len()];
+            let mut contacts = vec![Vec::new(); levels.len()];
             for k in 1..levels.len() {
                 let target = levels[k];
                 let (mut lo, mut hi) = (row[k - 1], f64::INFINITY);
@@ -315,18 +323,24 @@ pub fn static_deflection_table(
                     ));
                 }
                 row[k] = delta;
+                for s in &slices {
+                    contacts[k].push((s.force(delta * cos_bb)?.0, s.u_m));
+                }
             }
-            Ok((row, pairs))
+            Ok((row, pairs, contacts))
         })
         .collect();
     let mut deflection = Vec::with_capacity(samples * levels.len());
     let mut pairs = Vec::with_capacity(samples);
+    let mut contacts = Vec::with_capacity(samples * levels.len());
     for r in rows {
-        let (row, n) = r?;
+        let (row, n, c) = r?;
         deflection.extend(row);
         pairs.push(n);
+        contacts.extend(c);
     }
-    Ok((MeshLaw::new(pair.base_pitch_m, levels.to_vec(), deflection), pairs))
+    let spread = ContactSpread::from_contacts(levels.len(), pair.base_pitch_m, &contacts)?;
+    Ok((MeshLaw::new(pair.base_pitch_m, levels.to_vec(), deflection), pairs, spread))
 }
 
 /// The analytic lumped law's table: roll-position samples per base pitch, axial slices for
@@ -340,9 +354,9 @@ impl LumpedMesh {
     /// offline): the no-FE estimate.
     pub fn from_pair(pair: &GearPair) -> Result<LumpedMesh, String> {
         let levels = force_levels(pair, FORCE_LEVELS);
-        let (drive, pairs) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
+        let (drive, pairs, spread) = static_deflection_table(pair, &levels, TABLE_SAMPLES, AXIAL_SLICES)?;
         // The analytic law counts the pairs of the rigid geometry: the same under every force.
         let drive_pairs = pairs.iter().flat_map(|&n| std::iter::repeat_n(n, levels.len())).collect();
-        Ok(Self::from_drive_law(pair, MeshLawSource::Analytic, drive, drive_pairs))
+        Ok(Self::from_drive_law(pair, MeshLawSource::Analytic, drive, drive_pairs, spread))
     }
 }

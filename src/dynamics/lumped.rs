@@ -11,6 +11,7 @@
 //! pair entering contact is a steep but continuous change of the law over one table interval; its
 //! work is this torque. Damping c·δ̇ acts only while a flank is in contact; a flank never pulls.
 
+use super::mesh_friction::{ContactFriction, ContactSpread, SlidingFriction, MIN_SLIDING_REGULARIZATION_M_PER_S};
 use super::mesh_law::{MeshForce, MeshLaw};
 use crate::gear::GearPair;
 use serde::{Deserialize, Serialize};
@@ -48,6 +49,20 @@ pub struct LumpedMesh {
     /// offline: damping and the predicted natural frequency use it, the step path must not
     /// recompute it (an O(N) mean).
     pub reference_stiffness_n_per_m: f64,
+    /// Where the load is carried along the line of action, per row and force level of each
+    /// flank's law: what tooth friction acts on (`mesh_friction`).
+    pub drive_spread: ContactSpread,
+    pub coast_spread: ContactSpread,
+    /// The tooth friction coefficient of the spec (the FMU parameter's start value).
+    pub friction_coefficient: f64,
+    /// T₁T₂ (m), cos β_b, and the operating transverse pressure angle (rad): the friction's arms
+    /// and the shaft force's directions.
+    pub loa_m: f64,
+    pub cos_base_helix: f64,
+    /// The path of contact A…E (m from T₁).
+    pub path_start_m: f64,
+    pub path_end_m: f64,
+    pub operating_pressure_angle_rad: f64,
     /// The mesh force (N, along the line of action) at which one pair carrying it at the tip
     /// bends its root past the yield strength (`closed_forms::rating::yield_mesh_force_n`): beyond it the
     /// FMU logs a warning, once (the same rule as the PMOR-Hertz FMU's).
@@ -73,6 +88,7 @@ impl LumpedMesh {
         law_source: MeshLawSource,
         drive: MeshLaw,
         drive_pairs: Vec<u32>,
+        drive_spread: ContactSpread,
     ) -> LumpedMesh {
         let levels = drive.force_levels_n.clone();
         let n = drive.rows();
@@ -88,6 +104,7 @@ impl LumpedMesh {
             (0..n).flat_map(|i| drive.deflection_m[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
         let coast = MeshLaw::new(pair.base_pitch_m, levels, coast_rows);
         let coast_pairs = (0..n).flat_map(|i| drive_pairs[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
+        let coast_spread = drive_spread.with_rows_from(mirror);
         let reference_force = 200.0e3 * pair.face_width_m;
         let reference_stiffness = drive.mean_tangent_stiffness(reference_force);
         LumpedMesh {
@@ -106,6 +123,14 @@ impl LumpedMesh {
             coast,
             drive_pairs,
             coast_pairs,
+            drive_spread,
+            coast_spread,
+            friction_coefficient: pair.friction_coefficient,
+            loa_m: pair.loa_length_m(),
+            path_start_m: pair.path_start_m,
+            path_end_m: pair.path_end_m,
+            cos_base_helix: pair.base_helix_angle_rad.cos(),
+            operating_pressure_angle_rad: pair.operating_pressure_angle_rad,
             reference_force_n: reference_force,
             reference_stiffness_n_per_m: reference_stiffness,
             yield_mesh_force_n: crate::closed_forms::rating::yield_mesh_force_n(pair),
@@ -130,6 +155,32 @@ pub struct LumpedParameters {
     pub inertia_1_kgm2: f64,
     pub inertia_2_kgm2: f64,
     pub mesh_damping_ratio: f64,
+    /// Tooth friction coefficient μ (0: frictionless).
+    #[serde(default)]
+    pub friction_coefficient: f64,
+    /// Friction's regularization v_ε (m/s, `mesh_friction`): set from the step at
+    /// initialization (`sliding_regularization_m_per_s`).
+    #[serde(default = "min_sliding_regularization")]
+    pub sliding_regularization_m_per_s: f64,
+}
+
+fn min_sliding_regularization() -> f64 {
+    MIN_SLIDING_REGULARIZATION_M_PER_S
+}
+
+/// Friction's regularization v_ε for an RK4 step h (m/s): the larger of
+/// `MIN_SLIDING_REGULARIZATION_M_PER_S` and the band in which friction's viscous stiffness stays
+/// within RK4's real-axis reach. Within the band friction is a damper of μF_n/v_ε on each
+/// contact's sliding ω₁ρ₁ − ω₂ρ₂; on the two inertias its rate is at most
+/// λ = (μF_n/v_ε)·max over the path of (ρ₁²/J₁ + ρ₂²/J₂), and RK4 is stable for hλ ≤ 2.78. With F_n
+/// the yield force (the largest the model answers for, `yield_mesh_force_n`) and hλ = 2: a pair
+/// held by friction creeps no faster than this v_ε.
+pub fn sliding_regularization_m_per_s(mesh: &LumpedMesh, p: &LumpedParameters, step_s: f64) -> f64 {
+    let normal = mesh.yield_mesh_force_n / mesh.cos_base_helix;
+    // ρ₁²/J₁ + ρ₂²/J₂ is convex in u: its largest value on the path is at an end.
+    let reach = |u: f64| u * u / p.inertia_1_kgm2 + (mesh.loa_m - u).powi(2) / p.inertia_2_kgm2;
+    let arms = reach(mesh.path_start_m).max(reach(mesh.path_end_m));
+    (p.friction_coefficient * normal * arms * step_s / 2.0).max(MIN_SLIDING_REGULARIZATION_M_PER_S)
 }
 
 /// Equivalent mass of the mesh mode along the LOA: 1/m_e = r_b1²/J₁ + r_b2²/J₂.
@@ -176,6 +227,9 @@ pub struct LumpedState {
     pub input_work_j: f64,
     /// ∫(F − F_elastic)·δ̇ dt: work dissipated by mesh damping.
     pub dissipated_j: f64,
+    /// ∫Σ f·v dt: work dissipated by tooth friction (never decreasing).
+    #[serde(default)]
+    pub friction_dissipated_j: f64,
 }
 
 /// What the mesh does at one instant.
@@ -193,6 +247,36 @@ pub struct MeshState {
     pub stiffness_n_per_m: f64,
     /// Elastic energy V (J).
     pub potential_j: f64,
+    /// Tooth friction on the loaded contacts (zero without friction or contact).
+    pub friction: ContactFriction,
+}
+
+/// The force the mesh puts on gear 2's shaft (N), contact and friction together, in the pair's
+/// frame at the pitch point; gear 1's is its opposite. Tangential: along the pitch circles'
+/// common tangent, positive in gear 2's mesh sense (driving it). Radial: along the centre line,
+/// positive pushing the gears apart. Axial: F_bt·tan β_b, positive on the drive flanks (its sense
+/// along the axis follows the helix hand; zero for spur gears).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ShaftForce {
+    pub tangential_n: f64,
+    pub radial_n: f64,
+    pub axial_n: f64,
+}
+
+impl ShaftForce {
+    /// From the transverse normal force along the line of action F_bt (negative on the coast
+    /// flank) and the friction force sum Σf (signed as the sliding): the normal force acts along
+    /// the line of action, at α_wt to the tangent; friction along the flanks' common tangent,
+    /// perpendicular to it (`mesh_friction`; on the coast flank, the mirror image).
+    pub fn of(transverse_force_n: f64, friction_n: f64, pressure_angle_rad: f64, tan_base_helix: f64) -> Self {
+        let (sin, cos) = pressure_angle_rad.sin_cos();
+        let flank = if transverse_force_n < 0.0 { -1.0 } else { 1.0 };
+        ShaftForce {
+            tangential_n: transverse_force_n * cos + friction_n * sin,
+            radial_n: transverse_force_n.abs() * sin - flank * friction_n * cos,
+            axial_n: transverse_force_n * tan_base_helix,
+        }
+    }
 }
 
 /// The entry of a per-row-and-level table (`LumpedMesh::drive_pairs`) at the row nearest ξ and
@@ -212,6 +296,8 @@ impl LumpedParameters {
             inertia_1_kgm2: mesh.inertia_1_kgm2,
             inertia_2_kgm2: mesh.inertia_2_kgm2,
             mesh_damping_ratio: mesh.mesh_damping_ratio,
+            friction_coefficient: mesh.friction_coefficient,
+            sliding_regularization_m_per_s: MIN_SLIDING_REGULARIZATION_M_PER_S,
         }
     }
 }
@@ -264,7 +350,53 @@ impl<'a> LumpedModel<'a> {
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
         }
+        let mu = self.params.friction_coefficient;
+        if mu > 0.0 && out.force_n != 0.0 {
+            // The drive flank's contacts travel from T₁ towards T₂ as ξ grows, the coast flank's
+            // (its mirror image) the other way.
+            let (spread, levels, travel) = if out.force_n > 0.0 {
+                (&m.drive_spread, &m.drive.force_levels_n, 1.0)
+            } else {
+                (&m.coast_spread, &m.coast.force_levels_n, -1.0)
+            };
+            let transverse = out.force_n.abs();
+            let law =
+                SlidingFriction { coefficient: mu, regularization_m_per_s: self.params.sliding_regularization_m_per_s };
+            out.friction = spread.friction(
+                law,
+                m.base_pitch_m,
+                m.loa_m,
+                levels,
+                transverse,
+                transverse / m.cos_base_helix,
+                xi,
+                travel,
+                [s.omega_1, s.omega_2],
+            );
+        }
         out
+    }
+
+    /// The instantaneous mesh efficiency 1 − P_loss/P_in, P_in the power the driving gear puts into
+    /// the mesh: gear 1's, −(its mesh torque)·ω₁, or gear 2's where gear 1's is not positive;
+    /// 1 where no power enters (at rest).
+    pub fn mesh_efficiency(&self, mesh: &MeshState, s: &LumpedState) -> f64 {
+        let m = self.mesh;
+        let into_1 = (m.base_radius_1_m * (mesh.force_n - mesh.roll_force_n) - mesh.friction.torque_nm[0]) * s.omega_1;
+        let into_2 = -(m.base_radius_2_m * mesh.force_n + mesh.friction.torque_nm[1]) * s.omega_2;
+        let input = if into_1 > 0.0 { into_1 } else { into_2 };
+        if input > 0.0 {
+            1.0 - mesh.friction.power_w / input
+        } else {
+            1.0
+        }
+    }
+
+    /// The force the mesh puts on gear 2's shaft at a state ([`ShaftForce`]; gear 1's is its opposite).
+    pub fn shaft_force(&self, mesh: &MeshState) -> ShaftForce {
+        let m = self.mesh;
+        let tan_bb = (1.0 - m.cos_base_helix * m.cos_base_helix).sqrt() / m.cos_base_helix;
+        ShaftForce::of(mesh.force_n, mesh.friction.force_n, m.operating_pressure_angle_rad, tan_bb)
     }
 
     /// Tooth pairs in contact at a state (an output only: the step path does not read it), from
@@ -287,8 +419,10 @@ impl<'a> LumpedModel<'a> {
         let m = self.mesh;
         let mesh = self.mesh_state(s);
         let delta_dot = m.base_radius_1_m * s.omega_1 - m.base_radius_2_m * s.omega_2;
-        let torque_1 = torques[0] - m.base_radius_1_m * mesh.force_n + m.base_radius_1_m * mesh.roll_force_n;
-        let torque_2 = torques[1] + m.base_radius_2_m * mesh.force_n;
+        let torque_1 = torques[0] - m.base_radius_1_m * mesh.force_n
+            + m.base_radius_1_m * mesh.roll_force_n
+            + mesh.friction.torque_nm[0];
+        let torque_2 = torques[1] + m.base_radius_2_m * mesh.force_n + mesh.friction.torque_nm[1];
         LumpedState {
             theta_1: s.omega_1,
             omega_1: torque_1 / self.params.inertia_1_kgm2,
@@ -296,6 +430,7 @@ impl<'a> LumpedModel<'a> {
             omega_2: torque_2 / self.params.inertia_2_kgm2,
             input_work_j: torques[0] * s.omega_1 + torques[1] * s.omega_2,
             dissipated_j: (mesh.force_n - mesh.elastic_force_n) * delta_dot,
+            friction_dissipated_j: mesh.friction.power_w,
         }
     }
 
@@ -317,6 +452,10 @@ impl<'a> LumpedModel<'a> {
             omega_2: k1.omega_2 + 2.0 * k2.omega_2 + 2.0 * k3.omega_2 + k4.omega_2,
             input_work_j: k1.input_work_j + 2.0 * k2.input_work_j + 2.0 * k3.input_work_j + k4.input_work_j,
             dissipated_j: k1.dissipated_j + 2.0 * k2.dissipated_j + 2.0 * k3.dissipated_j + k4.dissipated_j,
+            friction_dissipated_j: k1.friction_dissipated_j
+                + 2.0 * k2.friction_dissipated_j
+                + 2.0 * k3.friction_dissipated_j
+                + k4.friction_dissipated_j,
         };
         axpy(s, h / 6.0, &sum)
     }
@@ -339,5 +478,6 @@ fn axpy(s: &LumpedState, a: f64, d: &LumpedState) -> LumpedState {
         omega_2: s.omega_2 + a * d.omega_2,
         input_work_j: s.input_work_j + a * d.input_work_j,
         dissipated_j: s.dissipated_j + a * d.dissipated_j,
+        friction_dissipated_j: s.friction_dissipated_j + a * d.friction_dissipated_j,
     }
 }

@@ -4,6 +4,7 @@
 //! they share. The FMU glue that drives them is `crate::fmu`.
 
 pub mod lumped;
+pub mod mesh_friction;
 pub mod mesh_law;
 pub mod pmor;
 pub mod rk4_stability;

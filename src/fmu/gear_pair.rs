@@ -5,7 +5,7 @@
 
 use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
-use crate::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState};
+use crate::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState, ShaftForce};
 use crate::dynamics::pmor::model::PmorModel;
 use crate::dynamics::pmor::quasi_static::{Condensation, GearSplit};
 use crate::dynamics::pmor::{PmorDynamics, PmorOutputs, PmorState};
@@ -40,10 +40,17 @@ pub enum Var {
     Inertia2,
     MeshDampingRatio,
     StartAtEquilibrium,
+    FrictionCoefficient,
+    ForceTangential,
+    ForceRadial,
+    ForceAxial,
+    MeshPowerLoss,
+    MeshEfficiency,
+    MeshEnergyLoss,
 }
 
 impl Var {
-    pub const ALL: [Var; 20] = [
+    pub const ALL: [Var; 27] = [
         Var::Tau1,
         Var::Tau2,
         Var::Phi1,
@@ -64,6 +71,13 @@ impl Var {
         Var::Inertia2,
         Var::MeshDampingRatio,
         Var::StartAtEquilibrium,
+        Var::FrictionCoefficient,
+        Var::ForceTangential,
+        Var::ForceRadial,
+        Var::ForceAxial,
+        Var::MeshPowerLoss,
+        Var::MeshEfficiency,
+        Var::MeshEnergyLoss,
     ];
 
     pub fn name(self) -> &'static str {
@@ -88,6 +102,13 @@ impl Var {
             Var::Inertia2 => "inertia_2",
             Var::MeshDampingRatio => "mesh_damping_ratio",
             Var::StartAtEquilibrium => "start_at_equilibrium",
+            Var::FrictionCoefficient => "friction_coefficient",
+            Var::ForceTangential => "force_tangential",
+            Var::ForceRadial => "force_radial",
+            Var::ForceAxial => "force_axial",
+            Var::MeshPowerLoss => "mesh_power_loss",
+            Var::MeshEfficiency => "mesh_efficiency",
+            Var::MeshEnergyLoss => "mesh_energy_loss",
         }
     }
 
@@ -103,6 +124,7 @@ impl Var {
                 | Var::Inertia2
                 | Var::MeshDampingRatio
                 | Var::StartAtEquilibrium
+                | Var::FrictionCoefficient
         )
     }
 }
@@ -142,6 +164,14 @@ pub struct GearPairState {
     /// alone, so an FMU state carries it as it carries `pmor`.
     #[serde(default)]
     pub pmor_outputs: Option<PmorPortOutputs>,
+}
+
+/// The shaft force and the friction losses of a state, as the FMU answers them.
+struct MeshLosses {
+    shaft: ShaftForce,
+    power_loss_w: f64,
+    efficiency: f64,
+    energy_loss_j: f64,
 }
 
 /// The contact outputs of a PMOR-Hertz state, kept beside it (`GearPairState::pmor_outputs`).
@@ -533,6 +563,21 @@ impl GearPairFmu {
         }
     }
 
+    /// μ: in [0, 0.3] (`gear::MAX_FRICTION_COEFFICIENT`); the PMOR-Hertz dynamics are frictionless
+    /// so far (issue 42), and refuse any other value than 0 rather than ignore it.
+    fn friction_coefficient(&self, value: f64) -> Result<f64, String> {
+        let max = crate::gear::MAX_FRICTION_COEFFICIENT;
+        if !(0.0..=max).contains(&value) {
+            return Err(format!("friction_coefficient must be in [0, {max}], got {value}"));
+        }
+        if value != 0.0 && matches!(self.physics, Physics::PmorHertz { .. }) {
+            return Err(format!(
+                "friction_coefficient = {value}: tooth friction is not in the PMOR-Hertz dynamics yet; the lumped FMU (fmu-build build --lumped-fmu) carries it"
+            ));
+        }
+        Ok(value)
+    }
+
     fn mesh_damping_ratio(value: f64) -> Result<f64, String> {
         if (0.0..1.0).contains(&value) {
             Ok(value)
@@ -640,6 +685,8 @@ impl Model for GearPairFmu {
                     // The spec's mounting.mesh_damping_ratio, as the lumped FMU's (the build's
                     // step limit was found with it).
                     mesh_damping_ratio: model.pair.mesh_damping_ratio,
+                    friction_coefficient: 0.0,
+                    sliding_regularization_m_per_s: crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S,
                 },
             ),
         };
@@ -678,6 +725,7 @@ impl Model for GearPairFmu {
             Var::Inertia1 => s.params.inertia_1_kgm2 = self.inertia("inertia_1", 0, value)?,
             Var::Inertia2 => s.params.inertia_2_kgm2 = self.inertia("inertia_2", 1, value)?,
             Var::MeshDampingRatio => s.params.mesh_damping_ratio = Self::mesh_damping_ratio(value)?,
+            Var::FrictionCoefficient => s.params.friction_coefficient = self.friction_coefficient(value)?,
             Var::StartAtEquilibrium => {
                 return Err(format!("value reference {vr} (start_at_equilibrium) is a Boolean, not a Real"))
             }
@@ -698,14 +746,25 @@ impl Model for GearPairFmu {
         // The mechanical outputs of the model kind: the ports' angles and speeds, the bores'
         // angles (the DTE is bore to bore), force, stiffness.
         let bores_and_ports = |bore: [f64; 2], port: [(f64, f64); 2]| (bore, port.map(|p| p.0), port.map(|p| p.1));
-        let ((bore, theta, omega), force, stiffness) = match &self.physics {
+        let ((bore, theta, omega), force, stiffness, losses) = match &self.physics {
             Physics::Lumped(mesh) => {
-                let m = LumpedModel::new(mesh, s.params).mesh_state(&s.mech);
+                let model = LumpedModel::new(mesh, s.params);
+                let m = model.mesh_state(&s.mech);
                 let theta = [s.mech.theta_1, s.mech.theta_2];
-                ((theta, theta, [s.mech.omega_1, s.mech.omega_2]), m.force_n, m.stiffness_n_per_m)
+                let omega = [s.mech.omega_1, s.mech.omega_2];
+                let losses = MeshLosses {
+                    shaft: model.shaft_force(&m),
+                    power_loss_w: m.friction.power_w,
+                    efficiency: model.mesh_efficiency(&m, &s.mech),
+                    energy_loss_j: s.mech.friction_dissipated_j,
+                };
+                ((theta, theta, omega), m.force_n, m.stiffness_n_per_m, losses)
             }
             Physics::PmorHertz { model, place } => {
-                let needs_contact = matches!(var, Var::MeshForce | Var::MeshStiffness);
+                let needs_contact = matches!(
+                    var,
+                    Var::MeshForce | Var::MeshStiffness | Var::ForceTangential | Var::ForceRadial | Var::ForceAxial
+                );
                 let ports = |p: &PmorState| -> Result<_, String> {
                     // Condensed, the ports are the splits' mean axes: no dynamics to set up.
                     if let Some(sp) = self.splits(model, Self::added_inertia(model, s)) {
@@ -715,7 +774,22 @@ impl Model for GearPairFmu {
                     let dynamics = self.pmor(model, place, s);
                     Ok(bores_and_ports(p.theta, [dynamics.port(0, p)?, dynamics.port(1, p)?]))
                 };
-                match (&s.pmor, &s.pmor_outputs) {
+                // Frictionless (the build refuses μ > 0 here): the whole force is the normal force
+                // F_n, along the line of action in the normal plane (F_bt = F_n·cos β_b); a tip
+                // corner's force is taken along it too.
+                let pair = &model.pair;
+                let frictionless = |normal_force_n: f64| MeshLosses {
+                    shaft: ShaftForce::of(
+                        normal_force_n * pair.base_helix_angle_rad.cos(),
+                        0.0,
+                        pair.operating_pressure_angle_rad,
+                        pair.base_helix_angle_rad.tan(),
+                    ),
+                    power_loss_w: 0.0,
+                    efficiency: 1.0,
+                    energy_loss_j: 0.0,
+                };
+                let (ports_and_speeds, force, stiffness) = match (&s.pmor, &s.pmor_outputs) {
                     (Some(p), Some(o)) => (ports(p)?, o.mesh_force_n, o.mesh_stiffness_n_per_m),
                     (Some(p), None) if !needs_contact => (ports(p)?, f64::NAN, f64::NAN),
                     // Before initialization the pair sits at its start values with η = 0 (port
@@ -730,7 +804,8 @@ impl Model for GearPairFmu {
                         let (out, p) = self.pmor_outputs(s)?.expect("PMOR-Hertz physics");
                         (ports(&p)?, out.contact.normal_force_n, out.contact.tangent_stiffness_n_per_m)
                     }
-                }
+                };
+                (ports_and_speeds, force, stiffness, frictionless(force))
             }
         };
         let te = rb[0] * bore[0] - rb[1] * bore[1];
@@ -745,6 +820,13 @@ impl Model for GearPairFmu {
             Var::DteAngle => te / rb[1],
             Var::MeshForce => force,
             Var::MeshStiffness => stiffness,
+            Var::FrictionCoefficient => s.params.friction_coefficient,
+            Var::ForceTangential => losses.shaft.tangential_n,
+            Var::ForceRadial => losses.shaft.radial_n,
+            Var::ForceAxial => losses.shaft.axial_n,
+            Var::MeshPowerLoss => losses.power_loss_w,
+            Var::MeshEfficiency => losses.efficiency,
+            Var::MeshEnergyLoss => losses.energy_loss_j,
             Var::Phi1Start => s.start.theta_1,
             Var::Phi2Start => s.start.theta_2,
             Var::W1Start => s.start.omega_1,
@@ -810,6 +892,9 @@ impl Model for GearPairFmu {
         self.check_stability(s)?;
         s.mech = s.start;
         if let Physics::Lumped(mesh) = &self.physics {
+            // Friction's regularization: the narrowest band RK4 stays stable in at this step.
+            s.params.sliding_regularization_m_per_s =
+                crate::dynamics::lumped::sliding_regularization_m_per_s(mesh, &s.params, s.max_step_s);
             let model = LumpedModel::new(mesh, s.params);
             if s.start_at_equilibrium {
                 s.mech = lumped_equilibrium(&model, s.start, s.torques_nm[0])?;
@@ -850,13 +935,20 @@ impl Model for GearPairFmu {
         self.inertia("inertia_1", 0, s.params.inertia_1_kgm2)?;
         self.inertia("inertia_2", 1, s.params.inertia_2_kgm2)?;
         Self::mesh_damping_ratio(s.params.mesh_damping_ratio)?;
+        self.friction_coefficient(s.params.friction_coefficient)?;
+        let eps = s.params.sliding_regularization_m_per_s;
+        if !(eps.is_finite() && eps >= crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S) {
+            return Err(format!("the friction's regularization speed {eps} m/s is not a finite speed ≥ 1 mm/s"));
+        }
         // After initialization, the stability contract of exit_initialization holds too.
         if initialized {
             self.check_stability(s)?;
         }
         // Inputs, start values and the mechanical state: finite (set_reals refuses the rest).
         finite("tau_1/tau_2", &s.torques_nm)?;
-        let l = |m: &LumpedState| [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j];
+        let l = |m: &LumpedState| {
+            [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j, m.friction_dissipated_j]
+        };
         finite("the start values", &l(&s.start))?;
         finite("the lumped state", &l(&s.mech))?;
         finite("the start energy", &[s.start_energy_j])?;
@@ -921,7 +1013,10 @@ impl Model for GearPairFmu {
         }
         let stored = |x: &LumpedState| model.kinetic_energy(x) + model.mesh_state(x).potential_j;
         // The work integrals start at zero at ExitInitializationMode, where E₀ was stored.
-        energy_balance([s.start_energy_j, stored(&next)], [next.input_work_j, next.dissipated_j])?;
+        energy_balance(
+            [s.start_energy_j, stored(&next)],
+            [next.input_work_j, next.dissipated_j + next.friction_dissipated_j],
+        )?;
         s.mech = next;
         let warnings = self.validity.check(model.mesh_state(&next).force_n, &mut s.warned);
         s.pending_warnings.extend(warnings);

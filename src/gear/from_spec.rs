@@ -6,7 +6,9 @@ use super::involute::{inv, inv_inverse};
 use super::spec::PairSpec;
 use super::spec_error::{invalid, SpecError};
 use super::{fillet, modification, sig, spec, Gear, GearPair};
-use super::{DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE, MAX_TEETH, MODULE_RANGE_MM, YIELD_RANGE_MPA};
+use super::{
+    DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE, MAX_FRICTION_COEFFICIENT, MAX_TEETH, MODULE_RANGE_MM, YIELD_RANGE_MPA,
+};
 use crate::closed_forms::rating;
 use std::f64::consts::PI;
 
@@ -106,6 +108,16 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
     let zeta = spec.mounting.mesh_damping_ratio;
     if !(zeta.is_finite() && (0.0..1.0).contains(&zeta)) {
         return Err(invalid("mounting.mesh_damping_ratio", "must be in [0, 1)"));
+    }
+    let mu = spec.friction.coefficient;
+    if !(mu.is_finite() && (0.0..=MAX_FRICTION_COEFFICIENT).contains(&mu)) {
+        return Err(invalid(
+            "friction.coefficient",
+            format!(
+                "must be in [0, {MAX_FRICTION_COEFFICIENT}] (lubricated gear steel runs at 0.02–0.1, dry steel up to 0.3), got {}",
+                sig(mu)
+            ),
+        ));
     }
 
     let alpha_n = alpha_n_deg.to_radians();
@@ -364,6 +376,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
             y
         },
         mesh_damping_ratio: zeta,
+        friction_coefficient: mu,
         operating_torque_nm: 0.0,
         rack_dedendum_coefficient: hf,
         hertz_contact: spec.lumped.hertz_contact,

@@ -23,6 +23,9 @@ use std::f64::consts::PI;
 pub const MODULE_RANGE_MM: (f64, f64) = (0.1, 100.0);
 /// The most teeth a gear may have: every tooth is meshed, so the FE model grows with z.
 pub const MAX_TEETH: i64 = 500;
+/// The largest tooth friction coefficient a spec or an FMU instance may set: dry steel on steel
+/// (lubricated gear teeth run at 0.02–0.1).
+pub const MAX_FRICTION_COEFFICIENT: f64 = 0.3;
 /// Yield strengths a spec may give (MPa): from gear plastics to through-hardened steel.
 pub const YIELD_RANGE_MPA: (f64, f64) = (20.0, 5000.0);
 
@@ -139,6 +142,9 @@ pub struct GearPair {
     /// Yield strength: the bound of the tooth-root stress guard (`root_stress`).
     pub yield_strength_pa: f64,
     pub mesh_damping_ratio: f64,
+    /// The tooth friction coefficient μ (`[friction]`, issue 42; 0: frictionless).
+    #[serde(default)]
+    pub friction_coefficient: f64,
     /// The design torque on gear 1 (N·m): the spec's `operating.torque_nm`, or the pair's rated
     /// torque (`rating::rated_torque_nm`). What the offline builds size their models on.
     pub operating_torque_nm: f64,

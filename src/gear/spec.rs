@@ -133,6 +133,16 @@ pub struct LumpedSpec {
     pub hertz_contact: HertzContact,
 }
 
+/// Tooth friction (issue 42): the sliding flanks' Coulomb friction on every loaded contact.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// The coefficient μ of the tangential force μ·F_n that opposes the flanks' sliding, the
+    /// same at every contact (a constant law). Default 0: a frictionless mesh, as the paper's.
+    #[serde(default)]
+    pub coefficient: f64,
+}
+
 /// The operating point the pair is designed for: what the offline build sizes its model on.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -159,6 +169,8 @@ pub struct PairSpec {
     pub lumped: LumpedSpec,
     #[serde(default)]
     pub operating: OperatingSpec,
+    #[serde(default)]
+    pub friction: FrictionSpec,
     /// Finite element mesh resolution (defaults: the coarse test mesh).
     #[serde(default)]
     pub mesh: super::mesh_spec::MeshSpec,

@@ -24,6 +24,7 @@
 
 use super::statics::StaticModel;
 use crate::contact::mesh_kinematics::Flank;
+use crate::dynamics::mesh_friction::ContactSpread;
 use crate::dynamics::mesh_law::MeshLaw;
 use crate::gear::GearPair;
 use rayon::prelude::*;
@@ -78,22 +79,25 @@ fn drive_law_from_statics_dyn(
     let done = std::sync::atomic::AtomicUsize::new(0);
     let layers = &model.gears[0].flank.layer_z_m;
     let z_mid: Vec<f64> = layers.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
-    // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass).
-    let ste_at = |roll: f64, torque: f64| -> Result<(f64, usize), String> {
+    // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass),
+    // its pairs in contact and where its load is carried.
+    let ste_at = |roll: f64, torque: f64| -> Result<(f64, usize, Vec<(f64, f64)>), String> {
         let solve = |delta: f64| {
             let theta2 = ((roll - roll_offset - delta) / rb2).rem_euclid(pitch2);
             model.solve(theta2, torque)
         };
         let first = solve(0.0)?;
         let case = solve(first.ste_m)?;
-        Ok((case.ste_m, case.pairs_in_contact))
+        let contacts = case.elements.iter().map(|e| (e.force_n, contact_point_m(pair, e))).collect();
+        Ok((case.ste_m, case.pairs_in_contact, contacts))
     };
     if levels.len() < 2 {
         return Err("the mesh law needs a force level above zero".into());
     }
     // Per roll position: the STE and the pairs in contact up the levels, until the statics refuse
     // one (then that level and its reason).
-    let table: Vec<(Vec<f64>, Vec<u32>, Option<(usize, String)>)> = (0..rows)
+    type Row = (Vec<f64>, Vec<u32>, Vec<Vec<(f64, f64)>>, Option<(usize, String)>);
+    let table: Vec<Row> = (0..rows)
         .into_par_iter()
         .map(|i| {
             let roll = pair.base_pitch_m * i as f64 / rows as f64;
@@ -107,20 +111,21 @@ fn drive_law_from_statics_dyn(
                 let first = at(0.0).ok_or("no flank within reach")?;
                 at(first).ok_or_else(|| "no flank within reach".to_string())
             };
-            let (mut row, mut pairs) = (vec![0.0], vec![0]);
+            let (mut row, mut pairs, mut contacts) = (vec![0.0], vec![0], vec![Vec::new()]);
             match no_load() {
                 Ok(delta) => row[0] = delta,
                 Err(e) => {
                     let why = format!("roll {roll:.4e} m, no load: {e}");
-                    return (row, pairs, Some((0, why)));
+                    return (row, pairs, contacts, Some((0, why)));
                 }
             }
             let mut refused = None;
             for (k, &force) in levels.iter().enumerate().skip(1) {
                 match ste_at(roll, force * rb1) {
-                    Ok((ste, n)) => {
+                    Ok((ste, n, c)) => {
                         row.push(ste);
                         pairs.push(n as u32);
+                        contacts.push(c);
                     }
                     Err(e) => {
                         refused = Some((k, format!("roll {roll:.4e} m, force {force:.4e} N: {e}")));
@@ -131,13 +136,12 @@ fn drive_law_from_statics_dyn(
             // Under no load: the pairs the lightest load touches.
             pairs[0] = pairs.get(1).copied().unwrap_or(0);
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-            (row, pairs, refused)
+            (row, pairs, contacts, refused)
         })
         .collect();
     // The highest level every roll position reached, and the first refusal that set it.
-    let top = table.iter().map(|(row, _, _)| row.len() - 1).min().unwrap_or(0);
-    let capped =
-        table.iter().filter_map(|(_, _, r)| r.as_ref()).find(|(k, _)| *k == top + 1).map(|(_, why)| why.clone());
+    let top = table.iter().map(|(row, ..)| row.len() - 1).min().unwrap_or(0);
+    let capped = table.iter().filter_map(|(.., r)| r.as_ref()).find(|(k, _)| *k == top + 1).map(|(_, why)| why.clone());
     let operating_force = 2.0 * pair.operating_torque_nm / rb1;
     if levels[top] < operating_force.min(levels[levels.len() - 1]) {
         return Err(format!(
@@ -150,7 +154,8 @@ fn drive_law_from_statics_dyn(
     let kept = &levels[..=top];
     let mut deflection = Vec::with_capacity(rows * kept.len());
     let mut pairs = Vec::with_capacity(rows * kept.len());
-    for (i, (row, n, _)) in table.into_iter().enumerate() {
+    let mut contacts = Vec::with_capacity(rows * kept.len());
+    for (i, (row, n, c, _)) in table.into_iter().enumerate() {
         // F(δ) must be single-valued: the deflection grows with the force.
         if let Some(k) = (1..kept.len()).find(|&k| !(row[k] > row[k - 1])) {
             return Err(format!(
@@ -164,10 +169,12 @@ fn drive_law_from_statics_dyn(
         }
         deflection.extend_from_slice(&row[..kept.len()]);
         pairs.extend_from_slice(&n[..kept.len()]);
+        contacts.extend(c.into_iter().take(kept.len()));
     }
     Ok(StaticMeshLaw {
         law: MeshLaw::new(pair.base_pitch_m, kept.to_vec(), deflection),
         pairs,
+        spread: ContactSpread::from_contacts(kept.len(), pair.base_pitch_m, &contacts)?,
         capped: capped.map(|why| format!("the table ends at {:.4e} N, where the statics refuse: {why}", kept[top])),
     })
 }
@@ -178,5 +185,21 @@ fn drive_law_from_statics_dyn(
 pub struct StaticMeshLaw {
     pub law: MeshLaw,
     pub pairs: Vec<u32>,
+    /// Where the load is carried along the line of action, per row and level (tooth friction's
+    /// contacts, `mesh_friction`).
+    pub spread: ContactSpread,
     pub capped: Option<String>,
+}
+
+/// Where a static contact element touches, as a point u (m from T₁) of the transverse line of
+/// action: a conjugate contact's own, u = √(r₁² − r_b1²); a tip corner's is taken on the involute
+/// it touches (gear 2's flank for gear 1's corner: u = L − √(r₂² − r_b2²)), whose tangent the
+/// sliding follows.
+pub fn contact_point_m(pair: &GearPair, e: &super::statics::ElementResult) -> f64 {
+    use crate::contact::mesh_kinematics::ContactKind;
+    let roll = |r: f64, rb: f64| (r * r - rb * rb).max(0.0).sqrt();
+    match e.kind {
+        ContactKind::TipOfGear1 => pair.loa_length_m() - roll(e.radius_m[1], pair.gear2.base_radius_m),
+        ContactKind::Conjugate | ContactKind::TipOfGear2 => roll(e.radius_m[0], pair.gear1.base_radius_m),
+    }
 }
