@@ -40,14 +40,20 @@ pub(crate) fn inspect(
         sig(gearfmu::closed_forms::rating::yield_torque_nm(&pair))
     );
     println!("  ISO 6336-1 c_γα·b {iso_total:.4e} N/m");
-    // The sliding loss estimate a drivetrain engineer starts from (the FMUs carry no friction yet).
-    use gearfmu::closed_forms::gear_loss::{addendum_contact_ratios, gear_loss_factor};
-    match gear_loss_factor(&pair) {
+    // The sliding loss estimate a drivetrain engineer starts from (the lumped FMU's friction is
+    // checked against it, `tests/lumped_friction.rs`).
+    use gearfmu::closed_forms::gear_loss::{addendum_contact_ratios, gear_loss_factor, gear_loss_factor_uniform_load};
+    let h_v = gear_loss_factor(&pair);
+    match &h_v {
         Ok(h_v) => {
             let [e1, e2] = addendum_contact_ratios(&pair);
             println!(
                 "  ISO/TR 14179-2 gear loss factor H_V {h_v:.4}: mesh efficiency 1 − μ·H_V = {:.2} % at μ = 0.05 (addendum contact ratios ε₁ {e1:.4}, ε₂ {e2:.4})",
                 100.0 * (1.0 - 0.05 * h_v)
+            );
+            println!(
+                "  the same with the load spread evenly over the path (a helical pair's limit at ε_β ≥ 1): H_V,u {:.4}",
+                gear_loss_factor_uniform_load(&pair)
             )
         }
         Err(why) => println!("  gear loss factor H_V: not given: {why}"),
@@ -93,6 +99,12 @@ pub(crate) fn inspect(
             "reference_stiffness_n_per_m": mesh.reference_stiffness(),
             "mesh_natural_frequency_hz": mesh_natural_frequency_hz(&mesh, &params, mesh.reference_force_n),
             "iso6336_c_gamma_alpha_n_per_m": iso_total,
+            "operating_torque_nm": pair.operating_torque_nm,
+            "operating_pressure_angle_rad": pair.operating_pressure_angle_rad,
+            "base_helix_angle_rad": pair.base_helix_angle_rad,
+            "overlap_ratio": pair.overlap_ratio,
+            "gear_loss_factor_iso": h_v.as_ref().ok(),
+            "gear_loss_factor_uniform_load": gear_loss_factor_uniform_load(&pair),
             "mesh_law": match mesh.law_source {
                 gearfmu::dynamics::lumped::MeshLawSource::Analytic => "analytic",
                 gearfmu::dynamics::lumped::MeshLawSource::FeStatics => "fe",

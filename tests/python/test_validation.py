@@ -38,6 +38,10 @@ def test_model_description_matches_contract(fmi_case):
         "w_1_start": ("parameter", "Real"), "w_2_start": ("parameter", "Real"),
         "max_step": ("parameter", "Real"), "inertia_1": ("parameter", "Real"),
         "inertia_2": ("parameter", "Real"), "mesh_damping_ratio": ("parameter", "Real"),
+        "friction_coefficient": ("parameter", "Real"),
+        "force_tangential": ("output", "Real"), "force_radial": ("output", "Real"),
+        "force_axial": ("output", "Real"), "mesh_power_loss": ("output", "Real"),
+        "mesh_efficiency": ("output", "Real"), "mesh_energy_loss": ("output", "Real"),
     }
     for name, (causality, type_) in expected.items():
         assert name in variables, f"missing variable {name}"

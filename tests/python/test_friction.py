@@ -1,0 +1,193 @@
+"""Tooth friction through the FMI interface (issue 42), with fmpy as the master.
+
+The lumped FMUs whose mesh law and friction contacts come from the FE statics (`--model lumped`,
+the default FE law) run slow, speed-held brake runs: the mesh loss over whole mesh cycles
+against ISO/TR 14179-2's gear loss factor H_V (evidence: the closed form, ``fmu-build inspect
+--json``), and the shaft-force outputs against F_t = T₁/r_w1, F_r = F_t·tan α_wt,
+F_a = F_t·tan β_w. The PMOR-Hertz FMU is frictionless so far: it refuses μ ≠ 0, and its
+shaft forces are checked at μ = 0. A slow torque reversal through zero speed runs without an
+error, its friction dissipation never decreasing.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from conftest import REPO_ROOT, GearCase, _fmu_build
+
+# The pairs of issue 42's efficiency check: spec -> FE-fed lumped FMU.
+FRICTION_SPECS = {
+    "kurokawa_spur": "examples/kurokawa_spur.toml",
+    "small_spur": "examples/small_spur.toml",
+    "small_helical": "examples/small_helical.toml",
+}
+
+
+@pytest.fixture(scope="module")
+def friction_fmus(tmp_path_factory) -> dict[str, GearCase]:
+    from fmpy import extract
+
+    out = tmp_path_factory.mktemp("friction")
+    cases = {}
+    for name, spec in FRICTION_SPECS.items():
+        fmu = REPO_ROOT / "target" / "fmu" / f"friction_{name}.fmu"
+        fmu.parent.mkdir(parents=True, exist_ok=True)
+        _fmu_build("build", spec, "-o", str(fmu), "--model", "lumped")
+        dump = out / f"{name}.json"
+        _fmu_build("inspect", spec, "--json", str(dump), "--from-fmu", str(fmu))
+        mesh = json.loads(dump.read_text())
+        unzip = Path(extract(str(fmu), unzipdir=out / f"{name}_unzipped"))
+        cases[name] = GearCase(name, REPO_ROOT / spec, fmu, dump, mesh, unzip, "lumped")
+    return cases
+
+
+def brake_held_run(slave, mesh: dict, torque: float, mesh_hz: float, cycles: int, comm_step: float = 1e-4):
+    """τ₁ held, gear 2 braked to hold its speed (τ₂ = −T₁·z₂/z₁ − k·(ω₂ − ω₂*), settling in
+    about 10 ms); after 40 mesh cycles, `cycles` whole ones are measured. Returns the loss over
+    the window's input work, and the window's mean shaft forces, each output sampled per step."""
+    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
+    ratio = z2 / z1
+    w2_target = 2 * math.pi * mesh_hz / z2
+    j_total = mesh["inertia_2_kgm2"] + mesh["inertia_1_kgm2"] * ratio**2
+    gain = j_total / 0.01
+    period = 1.0 / mesh_hz
+    settle = round(40 * period / comm_step)
+    window = round(cycles * period / comm_step)
+    vr = slave.vr
+    outputs = [vr[n] for n in ("w_1", "w_2", "mesh_energy_loss", "force_tangential", "force_radial", "force_axial",
+                               "mesh_efficiency")]
+    t, work, start_loss, sums = 0.0, 0.0, None, [0.0, 0.0, 0.0, 0.0]
+    w1, w2 = slave.fmu.getReal(outputs[:2])
+    for k in range(settle + window):
+        slave.set_inputs(torque, -torque * ratio - gain * (w2 - w2_target))
+        slave.step(t, comm_step)
+        t += comm_step
+        w1_next, w2, loss, f_t, f_r, f_a, eta = slave.fmu.getReal(outputs)
+        assert 0.0 < eta <= 1.0, f"instantaneous efficiency {eta} at t = {t}"
+        if k == settle - 1:
+            start_loss = loss
+        elif k >= settle:
+            work += torque * 0.5 * (w1 + w1_next) * comm_step
+            for i, v in enumerate((f_t, f_r, f_a, eta)):
+                sums[i] += v / window
+        w1 = w1_next
+    return (loss - start_loss) / work, sums
+
+
+def operating(mesh: dict) -> tuple[float, float, float]:
+    """The operating torque, r_w1 and the operating pressure angle."""
+    alpha = mesh["operating_pressure_angle_rad"]
+    return mesh["operating_torque_nm"], mesh["base_radius_1_m"] / math.cos(alpha), alpha
+
+
+@pytest.mark.parametrize("name", sorted(FRICTION_SPECS))
+def test_quasi_static_efficiency_against_iso_tr_14179_2(friction_fmus, make_slave, name):
+    """Evidence: ISO/TR 14179-2's H_V, P_loss = μ·H_V·P_in, for spur pairs; for the helical pair
+    (ε_β ≈ 1, load on inclined contact lines spread over the plane of action, which H_V's spur
+    sharing does not describe) the uniform-load closed form, ISO's printed beside it. At 200 Hz
+    mesh frequency (a tenth of the resonance and below) the mesh is quasi-static; μ = 0.05."""
+    case = friction_fmus[name]
+    mesh = case.mesh
+    torque, _, _ = operating(mesh)
+    mu = 0.05
+    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
+    w1 = 2 * math.pi * 200.0 / z1
+    slave = make_slave(case, f"eff-{name}", parameters={"friction_coefficient": mu, "w_1_start": w1,
+                                                         "w_2_start": w1 * z1 / z2},
+                       booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+    loss_share, (_, _, _, eta_mean) = brake_held_run(slave, mesh, torque, 200.0, 20)
+    h_v, h_u = mesh["gear_loss_factor_iso"], mesh["gear_loss_factor_uniform_load"]
+    helical = mesh["overlap_ratio"] > 0.5
+    reference = mu * (h_u if helical else h_v)
+    print(f"{name}: loss {loss_share:.5f} of the input (efficiency {1 - loss_share:.5f}, mean instantaneous "
+          f"{eta_mean:.5f}); μH_V = {mu * h_v:.5f} (ISO/TR 14179-2), μH_V,u = {mu * h_u:.5f} (uniform load); "
+          f"loss / ISO's {loss_share / (mu * h_v):.4f}")
+    assert loss_share == pytest.approx(reference, rel=0.10)
+    # The instantaneous efficiency's mean tells the same loss to within the load's ripple.
+    assert 1 - eta_mean == pytest.approx(loss_share, rel=0.05)
+
+
+@pytest.mark.parametrize("name", sorted(FRICTION_SPECS))
+def test_shaft_forces_against_the_closed_forms(friction_fmus, make_slave, name):
+    """Evidence: F_t = T₁/r_w1, F_r = F_t·tan α_wt, F_a = F_t·tan β_w (tan β_w = tan β_b/cos α_wt),
+    mean over 20 mesh cycles of a slow brake-held run, frictionless: within 1 %. With μ = 0.05 the
+    forces move by friction's own force along the flanks' common tangent (printed; the Rust test
+    `shaft_forces_match_the_closed_forms_and_friction_moves_them_along_the_flank_tangent` checks
+    the decomposition)."""
+    case = friction_fmus[name]
+    mesh = case.mesh
+    torque, r_w1, alpha = operating(mesh)
+    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
+    w1 = 2 * math.pi * 200.0 / z1
+    f_t = torque / r_w1
+    tan_beta_w = math.tan(mesh["base_helix_angle_rad"]) / math.cos(alpha)
+    means = {}
+    for mu in (0.0, 0.05):
+        slave = make_slave(case, f"forces-{name}-{mu}", parameters={"friction_coefficient": mu, "w_1_start": w1,
+                                                                     "w_2_start": w1 * z1 / z2},
+                           booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+        _, means[mu] = brake_held_run(slave, mesh, torque, 200.0, 20)
+    t0, r0, a0, _ = means[0.0]
+    t1, r1, a1, _ = means[0.05]
+    print(f"{name}: F_t {t0:.2f} N (T₁/r_w1 {f_t:.2f}), F_r {r0:.2f} N ({f_t * math.tan(alpha):.2f}), "
+          f"F_a {a0:.2f} N ({f_t * tan_beta_w:.2f}); μ = 0.05: F_t {100 * (t1 / t0 - 1):+.3f} %, "
+          f"F_r {100 * (r1 / r0 - 1):+.3f} %, F_a {a1:.2f} N")
+    assert t0 == pytest.approx(f_t, rel=0.01)
+    assert r0 == pytest.approx(f_t * math.tan(alpha), rel=0.01)
+    assert a0 == pytest.approx(f_t * tan_beta_w, rel=0.01, abs=1e-6 * f_t)
+
+
+def test_pmor_hertz_fmu_is_frictionless_and_says_so(gear_fmus, make_slave):
+    """The PMOR-Hertz FMU carries no friction yet: friction_coefficient ≠ 0 is an fmi2Error (not
+    a silently frictionless run); at 0 its shaft forces follow the closed forms like the lumped
+    FMU's: F_t = T₁/r_w1 mean over a mesh cycle within 1 %, and no loss."""
+    from fmpy.fmi1 import FMICallException
+
+    case = gear_fmus["spur-pmor"]
+    slave = make_slave(case, "pmor-friction")
+    with pytest.raises(FMICallException):
+        slave.fmu.setReal([slave.vr["friction_coefficient"]], [0.05])
+    mesh = case.mesh
+    torque = 185.0
+    alpha = mesh["operating_pressure_angle_rad"]
+    r_w1 = mesh["base_radius_1_m"] / math.cos(alpha)
+    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
+    w1 = 2 * math.pi * 200.0 / z1
+    run = make_slave(case, "pmor-forces", parameters={"w_1_start": w1, "w_2_start": w1 * z1 / z2},
+                     booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+    _, (f_t, f_r, f_a, eta) = brake_held_run(run, mesh, torque, 200.0, 10, comm_step=2e-5 * 5)
+    print(f"PMOR-Hertz spur: F_t {f_t:.2f} N (T₁/r_w1 {torque / r_w1:.2f}), F_r {f_r:.2f} N, efficiency {eta}")
+    assert f_t == pytest.approx(torque / r_w1, rel=0.01)
+    assert f_r == pytest.approx(torque / r_w1 * math.tan(alpha), rel=0.01)
+    assert f_a == 0.0 and eta == pytest.approx(1.0, abs=1e-12)
+
+
+def test_a_slow_reversal_through_zero_speed_runs_and_friction_only_dissipates(friction_fmus, make_slave):
+    """Gear 1's torque reverses slowly (cosine over 0.4 s, ±T₁) against a viscous brake, from rest:
+    the pair stops, turns back, and the flanks part and meet the coast side. No fmi2Error, the
+    friction dissipation never decreases, the efficiency stays in (0, 1]."""
+    case = friction_fmus["kurokawa_spur"]
+    mesh = case.mesh
+    torque = mesh["operating_torque_nm"]
+    slave = make_slave(case, "reversal", parameters={"friction_coefficient": 0.05},
+                       booleans={"start_at_equilibrium": True}, inputs=(torque, 0.0))
+    vr = slave.vr
+    refs = [vr[n] for n in ("w_1", "w_2", "mesh_energy_loss", "mesh_efficiency", "mesh_force")]
+    h, t, last_loss, speeds, forces = 1e-4, 0.0, 0.0, [], []
+    for _ in range(6000):
+        w1, w2, loss, eta, force = slave.fmu.getReal(refs)
+        slave.set_inputs(torque * math.cos(math.pi * min(t / 0.4, 1.0)), -2.0 * torque * w2 / 50.0)
+        slave.step(t, h)
+        t += h
+        assert loss >= last_loss and 0.0 < eta <= 1.0
+        last_loss = loss
+        speeds.append(w1)
+        forces.append(force)
+    print(f"reversal: ω₁ from {max(speeds):.2f} to {min(speeds):.2f} rad/s, mesh force {max(forces):.0f} … "
+          f"{min(forces):.0f} N, friction dissipated {last_loss:.3f} J")
+    assert max(speeds) > 0.0 > min(speeds), "the pair turned back"
+    assert min(forces) < 0.0 < max(forces), "both flanks carried the load"
