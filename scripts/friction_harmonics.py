@@ -51,17 +51,19 @@ def open_slave(fmu: Path, unzipped: str, name: str, parameters: dict, start_at_e
 
 
 def run(slave, vr, steps: int, h: float, torques) -> np.ndarray:
-    """Rows t, w_1, w_2, dte, mesh_energy_loss, τ₁ after each step; `torques(t, w_2)` -> (τ₁, τ₂)."""
+    """Rows t, w_1, w_2, dte, mesh_energy_loss, τ₁ (the τ₁ of the step that ends there): the
+    start, then after each step; `torques(t, w_2)` -> (τ₁, τ₂)."""
     refs = [vr[n] for n in ("w_1", "w_2", "dte", "mesh_energy_loss")]
-    rows = np.empty((steps, 6))
-    w_2 = slave.getReal([vr["w_2"]])[0]
+    rows = np.empty((steps + 1, 6))
+    rows[0] = (0.0, *slave.getReal(refs), 0.0)
+    w_2 = rows[0, 2]
     for k in range(steps):
         t = k * h
         tau = torques(t, w_2)
         slave.setReal([vr["tau_1"], vr["tau_2"]], list(tau))
         slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
         w_1, w_2, dte, loss = slave.getReal(refs)
-        rows[k] = (t + h, w_1, w_2, dte, loss, tau[0])
+        rows[k + 1] = (t + h, w_1, w_2, dte, loss, tau[0])
     slave.terminate()
     slave.freeInstance()
     return rows
@@ -72,22 +74,23 @@ def analyse(rows: np.ndarray, z1: int, cycles_from: float) -> dict:
     (a roll count in mesh cycles, z₁·φ₁/2π) to the run's last whole cycle."""
     t, w_1, dte, loss, tau_1 = rows[:, 0], rows[:, 1], rows[:, 3], rows[:, 4], rows[:, 5]
     h = t[1] - t[0]
-    cycles = z1 * np.concatenate([[0.0], np.cumsum(w_1 * h)]) / (2 * math.pi)
+    # Mesh cycles rolled, z₁·φ₁/2π, by the trapezoid of ω₁ (φ₁ from the start).
+    cycles = z1 * np.concatenate([[0.0], np.cumsum(0.5 * (w_1[1:] + w_1[:-1]) * h)]) / (2 * math.pi)
     last = math.floor(cycles[-1])
     start = max(math.ceil(cycles_from), last - 20) if cycles_from < last else last - 1
-    i0, i1 = np.searchsorted(cycles, start), np.searchsorted(cycles, last)
-    window = slice(i0, i1)
+    i0, i1 = int(np.searchsorted(cycles, start)), int(np.searchsorted(cycles, last))
     n_cycles = last - start
     # The DTE against the roll (mesh cycles), resampled evenly: harmonics per mesh cycle.
-    roll = cycles[1:][window]
     grid = np.linspace(start, last, 64 * n_cycles, endpoint=False)
-    signal = np.interp(grid, roll, dte[window])
+    signal = np.interp(grid, cycles[i0:i1 + 1], dte[i0:i1 + 1])
     spectrum = np.fft.rfft(signal - signal.mean()) / len(signal) * 2
     amplitude = [abs(spectrum[n_cycles * k]) for k in range(1, HARMONICS + 1)]
-    work = float(np.sum(tau_1[window] * w_1[window] * h))
-    efficiency = 1.0 - (loss[i1 - 1] - loss[i0 - 1]) / work if work > 0 else float("nan")
+    # τ₁'s work from row i0 to i1: each step's τ₁ on its trapezoid of ω₁.
+    work = float(np.sum(tau_1[i0 + 1:i1 + 1] * 0.5 * (w_1[i0 + 1:i1 + 1] + w_1[i0:i1]) * h))
+    efficiency = 1.0 - (loss[i1] - loss[i0]) / work if work > 0 else float("nan")
     return {"harmonics_um": [a * 1e6 for a in amplitude], "mean_um": float(signal.mean() * 1e6),
-            "efficiency": efficiency, "cycles": n_cycles, "mesh_hz": float(z1 * w_1[window].mean() / (2 * math.pi))}
+            "efficiency": efficiency, "cycles": n_cycles,
+            "mesh_hz": float(z1 * w_1[i0:i1 + 1].mean() / (2 * math.pi))}
 
 
 def main() -> None:
