@@ -836,11 +836,22 @@ fn forged_pmor_state(real: PmorState) -> impl Strategy<Value = Option<PmorState>
             prop_oneof![3 => Just(p.anchor[0]), 1 => any::<i64>(), 1 => -3i64..3],
             prop_oneof![3 => Just(p.anchor[1]), 1 => any::<i64>(), 1 => -3i64..3],
         ],
-        (field_f64(p.input_work_j), field_f64(p.dissipated_j), field_f64(p.torques_nm[0])),
+        (
+            field_f64(p.input_work_j),
+            field_f64(p.dissipated_j),
+            field_f64(p.torques_nm[0]),
+            field_f64(p.friction_dissipated_j),
+        ),
         0..8u8,
     )
         .prop_map(
-            move |([t1, t2, w1, w2], [e1, e2, d1, d2], anchor, (input_work_j, dissipated_j, tau_1), none)| {
+            move |(
+                [t1, t2, w1, w2],
+                [e1, e2, d1, d2],
+                anchor,
+                (input_work_j, dissipated_j, tau_1, friction_dissipated_j),
+                none,
+            )| {
                 (none != 0).then(|| PmorState {
                     theta: [t1, t2],
                     omega: [w1, w2],
@@ -850,6 +861,7 @@ fn forged_pmor_state(real: PmorState) -> impl Strategy<Value = Option<PmorState>
                     torques_nm: [tau_1, 0.0],
                     input_work_j,
                     dissipated_j,
+                    friction_dissipated_j,
                 })
             },
         )

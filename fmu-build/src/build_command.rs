@@ -76,14 +76,24 @@ pub(crate) fn build(
             spec.display()
         );
     }
-    if !matches!(model, ModelChoice::Lumped) && pair.friction_coefficient != 0.0 {
-        anyhow::bail!(
-            "{}: friction.coefficient = {}: tooth friction is not in the PMOR-Hertz dynamics yet (issue 42). \
-             Build the lumped FMU, which carries it (`--model lumped`; its mesh law and friction contacts come \
-             from the same FE statics), or set it to 0",
-            spec.display(),
-            pair.friction_coefficient
-        );
+    // Tooth friction: the lumped model, and the PMOR-Hertz model with its default integrator and
+    // condensation (where its friction work is tallied); the penalty reference is the paper's
+    // frictionless model.
+    let frictionless_only = match model {
+        ModelChoice::Lumped => None,
+        ModelChoice::PmorPenalty => Some("the standard PMOR reference is the paper's frictionless model"),
+        ModelChoice::PmorHertz => match (rom.integrator, rom.dynamics) {
+            (Some(IntegratorChoice::Verlet | IntegratorChoice::Rk4), _) => {
+                Some("the PMOR-Hertz model carries friction with its default integrator only (--integrator discrete-gradient)")
+            }
+            (_, Some(DynamicsChoice::Full)) => {
+                Some("the PMOR-Hertz model carries friction with its quasi-static dynamics only (--dynamics quasi-static)")
+            }
+            _ => None,
+        },
+    };
+    if let (Some(why), true) = (frictionless_only, pair.friction_coefficient != 0.0) {
+        anyhow::bail!("{}: friction.coefficient = {}: {why}; set it to 0", spec.display(), pair.friction_coefficient);
     }
     let so = library_bytes(library)?;
     match model {

@@ -72,7 +72,7 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
                 ("inertia_2", m.gears[1].polar_inertia_kgm2),
                 ("mesh_damping_ratio", m.pair.mesh_damping_ratio),
                 ("max_step", m.max_step_s),
-                ("friction_coefficient", 0.0),
+                ("friction_coefficient", m.pair.friction_coefficient),
             ],
             format!(
                 "Gear pair {} (z {}/{}), {}: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), {}",

@@ -122,6 +122,19 @@ impl SectionContact {
     }
 }
 
+/// Where a contact of `kind` at radii `radius_m` (on gear 1, gear 2) touches, as a point u (m
+/// from T₁) of the transverse line of action of its flank: a conjugate contact's own,
+/// u = √(r₁² − r_b1²); a tip corner's is taken on the involute it touches (gear 2's flank for
+/// gear 1's corner: u = T₁T₂ − √(r₂² − r_b2²)), whose tangent the sliding follows. Tooth
+/// friction's arms about the axes are then u and T₁T₂ − u (`dynamics::mesh_friction`).
+pub fn line_of_action_point_m(pair: &GearPair, kind: ContactKind, radius_m: [f64; 2]) -> f64 {
+    let roll = |r: f64, rb: f64| (r * r - rb * rb).max(0.0).sqrt();
+    match kind {
+        ContactKind::TipOfGear1 => pair.loa_length_m() - roll(radius_m[1], pair.gear2.base_radius_m),
+        ContactKind::Conjugate | ContactKind::TipOfGear2 => roll(radius_m[0], pair.gear1.base_radius_m),
+    }
+}
+
 /// The radius of curvature of a tip corner in contact, `past_m` along the line of action beyond
 /// the end of the path of contact (where conjugate contact hands over to the corner). On the
 /// rounded edge it is the edge radius; at the hand-over it is the involute's at the tip. Between

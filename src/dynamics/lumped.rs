@@ -11,7 +11,10 @@
 //! pair entering contact is a steep but continuous change of the law over one table interval; its
 //! work is this torque. Damping c·δ̇ acts only while a flank is in contact; a flank never pulls.
 
-use super::mesh_friction::{ContactFriction, ContactSpread, SlidingFriction, MIN_SLIDING_REGULARIZATION_M_PER_S};
+use super::mesh_friction::{
+    friction_reach_per_kg, regularization_for_step_m_per_s, ContactFriction, ContactSpread, SlidingFriction,
+    MIN_SLIDING_REGULARIZATION_M_PER_S,
+};
 use super::mesh_law::{MeshForce, MeshLaw};
 use crate::gear::GearPair;
 use serde::{Deserialize, Serialize};
@@ -168,19 +171,14 @@ fn min_sliding_regularization() -> f64 {
     MIN_SLIDING_REGULARIZATION_M_PER_S
 }
 
-/// Friction's regularization v_ε for an RK4 step h (m/s): the larger of
-/// `MIN_SLIDING_REGULARIZATION_M_PER_S` and the band in which friction's viscous stiffness stays
-/// within RK4's real-axis reach. Within the band friction is a damper of μF_n/v_ε on each
-/// contact's sliding ω₁ρ₁ − ω₂ρ₂; on the two inertias its rate is at most
-/// λ = (μF_n/v_ε)·max over the path of (ρ₁²/J₁ + ρ₂²/J₂), and RK4 is stable for hλ ≤ 2.78. With F_n
-/// the yield force (the largest the model answers for, `yield_mesh_force_n`) and hλ = 2: a pair
-/// held by friction creeps no faster than this v_ε.
+/// Friction's regularization v_ε for an RK4 step h (m/s): `regularization_for_step_m_per_s` at
+/// h·λ = 2, with F_n the yield force (the largest the model answers for, `yield_mesh_force_n`).
+/// A pair held by friction creeps no faster than this v_ε.
 pub fn sliding_regularization_m_per_s(mesh: &LumpedMesh, p: &LumpedParameters, step_s: f64) -> f64 {
+    let reach =
+        friction_reach_per_kg(mesh.loa_m, [mesh.path_start_m, mesh.path_end_m], [p.inertia_1_kgm2, p.inertia_2_kgm2]);
     let normal = mesh.yield_mesh_force_n / mesh.cos_base_helix;
-    // ρ₁²/J₁ + ρ₂²/J₂ is convex in u: its largest value on the path is at an end.
-    let reach = |u: f64| u * u / p.inertia_1_kgm2 + (mesh.loa_m - u).powi(2) / p.inertia_2_kgm2;
-    let arms = reach(mesh.path_start_m).max(reach(mesh.path_end_m));
-    (p.friction_coefficient * normal * arms * step_s / 2.0).max(MIN_SLIDING_REGULARIZATION_M_PER_S)
+    regularization_for_step_m_per_s(p.friction_coefficient, normal, reach, step_s, 2.0)
 }
 
 /// Equivalent mass of the mesh mode along the LOA: 1/m_e = r_b1²/J₁ + r_b2²/J₂.

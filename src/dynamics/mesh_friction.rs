@@ -30,6 +30,29 @@ use serde::{Deserialize, Serialize};
 /// running pair is Coulomb's; at operating speed the flanks slide at metres per second.
 pub const MIN_SLIDING_REGULARIZATION_M_PER_S: f64 = 1e-3;
 
+/// v_ε for an integrator step h (m/s): the larger of `MIN_SLIDING_REGULARIZATION_M_PER_S` and the
+/// band in which friction's viscous rate stays within reach. Within the band friction is a damper
+/// of μF_n/v_ε on each contact's sliding ω₁ρ₁ − ω₂ρ₂; on the two gears its rate is at most
+/// λ = (μF_n/v_ε)·`reach` with `reach` = max over the path of ρ₁²/J₁ + ρ₂²/J₂ (1/kg). v_ε is set
+/// so that h·λ = `step_times_rate`: 2 for RK4 (stable to 2.78 on the real axis), 1 for the
+/// discrete gradient, whose Newton leaves friction out of its matrix and so takes it by a
+/// fixed-point iteration that contracts as h·λ/2.
+pub fn regularization_for_step_m_per_s(
+    coefficient: f64,
+    normal_force_n: f64,
+    reach_per_kg: f64,
+    step_s: f64,
+    step_times_rate: f64,
+) -> f64 {
+    (coefficient * normal_force_n * reach_per_kg * step_s / step_times_rate).max(MIN_SLIDING_REGULARIZATION_M_PER_S)
+}
+
+/// max over the path A…E of ρ₁²/J₁ + ρ₂²/J₂ (1/kg): convex in u, so at an end.
+pub fn friction_reach_per_kg(loa_m: f64, path_m: [f64; 2], inertia_kgm2: [f64; 2]) -> f64 {
+    let reach = |u: f64| u * u / inertia_kgm2[0] + (loa_m - u).powi(2) / inertia_kgm2[1];
+    reach(path_m[0]).max(reach(path_m[1]))
+}
+
 /// The friction law: Coulomb's μ, regularized below v_ε.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlidingFriction {

@@ -6,6 +6,7 @@
 use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
 use crate::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState, ShaftForce};
+use crate::dynamics::mesh_friction::SlidingFriction;
 use crate::dynamics::pmor::model::PmorModel;
 use crate::dynamics::pmor::quasi_static::{Condensation, GearSplit};
 use crate::dynamics::pmor::{PmorDynamics, PmorOutputs, PmorState};
@@ -174,6 +175,42 @@ struct MeshLosses {
     energy_loss_j: f64,
 }
 
+/// The PMOR-Hertz pair's shaft force and losses from its contact outputs (NaN where none are
+/// kept and none were asked for), the bores' speeds and the friction's work so far. The
+/// normal force F_n acts along the line of action in the normal plane (F_bt = F_n·cos β_b; a tip
+/// corner's force is taken along it too); the friction along the flanks' tangent. The power into
+/// the mesh is the driving gear's −(contact torque on its bore)·θ̇.
+fn pmor_losses(
+    pair: &crate::gear::GearPair,
+    contact: Option<&PmorPortOutputs>,
+    bore_speeds: [f64; 2],
+    friction_j: f64,
+) -> MeshLosses {
+    let Some(o) = contact else {
+        let nan = f64::NAN;
+        return MeshLosses {
+            shaft: ShaftForce { tangential_n: nan, radial_n: nan, axial_n: nan },
+            power_loss_w: nan,
+            efficiency: nan,
+            energy_loss_j: friction_j,
+        };
+    };
+    let cos_bb = pair.base_helix_angle_rad.cos();
+    let into = [0, 1].map(|i| -o.mesh_torque_nm[i] * bore_speeds[i]);
+    let input = if into[0] > 0.0 { into[0] } else { into[1] };
+    MeshLosses {
+        shaft: ShaftForce::of(
+            o.mesh_force_n * cos_bb,
+            o.friction_force_n,
+            pair.operating_pressure_angle_rad,
+            pair.base_helix_angle_rad.tan(),
+        ),
+        power_loss_w: o.friction_power_w,
+        efficiency: if input > 0.0 { 1.0 - o.friction_power_w / input } else { 1.0 },
+        energy_loss_j: friction_j,
+    }
+}
+
 /// The contact outputs of a PMOR-Hertz state, kept beside it (`GearPairState::pmor_outputs`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PmorPortOutputs {
@@ -182,6 +219,14 @@ pub struct PmorPortOutputs {
     pub contact_pairs: u32,
     /// Elastic and contact energy (J): what the next settling's energy booking starts from.
     pub stored_j: f64,
+    /// Tooth friction's force sum (N, signed as the sliding) and power (W), and the contact's
+    /// torque on each bore (N·m, damper and friction included): the shaft force and losses.
+    #[serde(default)]
+    pub friction_force_n: f64,
+    #[serde(default)]
+    pub friction_power_w: f64,
+    #[serde(default)]
+    pub mesh_torque_nm: [f64; 2],
 }
 
 impl PmorPortOutputs {
@@ -191,6 +236,12 @@ impl PmorPortOutputs {
             mesh_stiffness_n_per_m: out.contact.tangent_stiffness_n_per_m,
             contact_pairs: out.contact.pairs_in_contact,
             stored_j: out.elastic_j + out.contact_j,
+            friction_force_n: out.contact.friction_force_n,
+            friction_power_w: out.contact.friction_power_w,
+            mesh_torque_nm: [
+                out.contact.force[0].first().copied().unwrap_or(0.0),
+                out.contact.force[1].first().copied().unwrap_or(0.0),
+            ],
         }
     }
 }
@@ -429,6 +480,12 @@ impl GearPairFmu {
         };
         dynamics.mesh_damping_n_s_per_m =
             model.mesh_damper_n_s_per_m(p.mesh_damping_ratio, [p.inertia_1_kgm2, p.inertia_2_kgm2]);
+        if p.friction_coefficient > 0.0 {
+            dynamics.friction = Some(SlidingFriction {
+                coefficient: p.friction_coefficient,
+                regularization_m_per_s: p.sliding_regularization_m_per_s,
+            });
+        }
         dynamics
     }
 
@@ -563,17 +620,29 @@ impl GearPairFmu {
         }
     }
 
-    /// μ: in [0, 0.3] (`gear::MAX_FRICTION_COEFFICIENT`); the PMOR-Hertz dynamics are frictionless
-    /// so far (issue 42), and refuse any other value than 0 rather than ignore it.
+    /// μ: in [0, 0.3] (`gear::MAX_FRICTION_COEFFICIENT`). The PMOR-Hertz model carries friction
+    /// with its default integrator and condensation only (its friction work is tallied there),
+    /// and refuses it otherwise rather than ignore it.
     fn friction_coefficient(&self, value: f64) -> Result<f64, String> {
         let max = crate::gear::MAX_FRICTION_COEFFICIENT;
         if !(0.0..=max).contains(&value) {
             return Err(format!("friction_coefficient must be in [0, {max}], got {value}"));
         }
-        if value != 0.0 && matches!(self.physics, Physics::PmorHertz { .. }) {
-            return Err(format!(
-                "friction_coefficient = {value}: tooth friction is not in the PMOR-Hertz dynamics yet; the lumped FMU (fmu-build build --lumped-fmu) carries it"
-            ));
+        if let (true, Physics::PmorHertz { model, .. }) = (value != 0.0, &self.physics) {
+            use crate::dynamics::pmor::{integrator::Integrator, model::FlankContact};
+            let condensed = self.default_splits.is_some();
+            if model.info.contact != FlankContact::Hertz
+                || model.integrator != Integrator::DiscreteGradient
+                || !condensed
+            {
+                return Err(format!(
+                    "friction_coefficient = {value}: tooth friction is carried by the PMOR-Hertz model with its default \
+                     discrete-gradient integrator and quasi-static condensation only (this FMU: {}, {}); the penalty \
+                     reference is the paper's frictionless model",
+                    model.integrator.name(),
+                    if condensed { "condensed" } else { "every coordinate dynamic" }
+                ));
+            }
         }
         Ok(value)
     }
@@ -685,7 +754,7 @@ impl Model for GearPairFmu {
                     // The spec's mounting.mesh_damping_ratio, as the lumped FMU's (the build's
                     // step limit was found with it).
                     mesh_damping_ratio: model.pair.mesh_damping_ratio,
-                    friction_coefficient: 0.0,
+                    friction_coefficient: model.pair.friction_coefficient,
                     sliding_regularization_m_per_s: crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S,
                 },
             ),
@@ -763,7 +832,13 @@ impl Model for GearPairFmu {
             Physics::PmorHertz { model, place } => {
                 let needs_contact = matches!(
                     var,
-                    Var::MeshForce | Var::MeshStiffness | Var::ForceTangential | Var::ForceRadial | Var::ForceAxial
+                    Var::MeshForce
+                        | Var::MeshStiffness
+                        | Var::ForceTangential
+                        | Var::ForceRadial
+                        | Var::ForceAxial
+                        | Var::MeshPowerLoss
+                        | Var::MeshEfficiency
                 );
                 let ports = |p: &PmorState| -> Result<_, String> {
                     // Condensed, the ports are the splits' mean axes: no dynamics to set up.
@@ -774,38 +849,29 @@ impl Model for GearPairFmu {
                     let dynamics = self.pmor(model, place, s);
                     Ok(bores_and_ports(p.theta, [dynamics.port(0, p)?, dynamics.port(1, p)?]))
                 };
-                // Frictionless (the build refuses μ > 0 here): the whole force is the normal force
-                // F_n, along the line of action in the normal plane (F_bt = F_n·cos β_b); a tip
-                // corner's force is taken along it too.
-                let pair = &model.pair;
-                let frictionless = |normal_force_n: f64| MeshLosses {
-                    shaft: ShaftForce::of(
-                        normal_force_n * pair.base_helix_angle_rad.cos(),
-                        0.0,
-                        pair.operating_pressure_angle_rad,
-                        pair.base_helix_angle_rad.tan(),
-                    ),
-                    power_loss_w: 0.0,
-                    efficiency: 1.0,
-                    energy_loss_j: 0.0,
-                };
-                let (ports_and_speeds, force, stiffness) = match (&s.pmor, &s.pmor_outputs) {
-                    (Some(p), Some(o)) => (ports(p)?, o.mesh_force_n, o.mesh_stiffness_n_per_m),
-                    (Some(p), None) if !needs_contact => (ports(p)?, f64::NAN, f64::NAN),
+                // The contact outputs where kept (or asked for), the bores' speeds and the
+                // friction's work so far.
+                let (ports_and_speeds, contact, bore_speeds, friction_j) = match (&s.pmor, &s.pmor_outputs) {
+                    (Some(p), Some(o)) => (ports(p)?, Some(*o), p.omega, p.friction_dissipated_j),
+                    (Some(p), None) if !needs_contact => (ports(p)?, None, p.omega, p.friction_dissipated_j),
                     // Before initialization the pair sits at its start values with η = 0 (port
                     // = bore): angles and speeds need no contact evaluation, which a start angle
                     // pressing the flanks beyond Hertz's range would refuse (found by fuzzing: a
                     // GetReal of tau_1 failed on it).
                     (None, _) if !needs_contact => {
                         let theta = [s.mech.theta_1, s.mech.theta_2];
-                        ((theta, theta, [s.mech.omega_1, s.mech.omega_2]), f64::NAN, f64::NAN)
+                        let omega = [s.mech.omega_1, s.mech.omega_2];
+                        ((theta, theta, omega), None, omega, 0.0)
                     }
                     _ => {
                         let (out, p) = self.pmor_outputs(s)?.expect("PMOR-Hertz physics");
-                        (ports(&p)?, out.contact.normal_force_n, out.contact.tangent_stiffness_n_per_m)
+                        (ports(&p)?, Some(PmorPortOutputs::of(&out)), p.omega, p.friction_dissipated_j)
                     }
                 };
-                (ports_and_speeds, force, stiffness, frictionless(force))
+                let losses = pmor_losses(&model.pair, contact.as_ref(), bore_speeds, friction_j);
+                let (force, stiffness) =
+                    contact.map_or((f64::NAN, f64::NAN), |o| (o.mesh_force_n, o.mesh_stiffness_n_per_m));
+                (ports_and_speeds, force, stiffness, losses)
             }
         };
         let te = rb[0] * bore[0] - rb[1] * bore[1];
@@ -891,6 +957,21 @@ impl Model for GearPairFmu {
         }
         self.check_stability(s)?;
         s.mech = s.start;
+        if let Physics::PmorHertz { model, .. } = &self.physics {
+            // Friction's regularization: the narrowest band the discrete gradient's fixed point on
+            // friction contracts in at this step, under the yield force.
+            use crate::dynamics::mesh_friction::{friction_reach_per_kg, regularization_for_step_m_per_s};
+            let pair = &model.pair;
+            let p = &s.params;
+            let reach = friction_reach_per_kg(
+                pair.loa_length_m(),
+                [pair.path_start_m, pair.path_end_m],
+                [p.inertia_1_kgm2, p.inertia_2_kgm2],
+            );
+            let normal = self.validity.yield_mesh_force_n / pair.base_helix_angle_rad.cos();
+            s.params.sliding_regularization_m_per_s =
+                regularization_for_step_m_per_s(p.friction_coefficient, normal, reach, s.max_step_s, 1.0);
+        }
         if let Physics::Lumped(mesh) = &self.physics {
             // Friction's regularization: the narrowest band RK4 stays stable in at this step.
             s.params.sliding_regularization_m_per_s =
@@ -972,9 +1053,23 @@ impl Model for GearPairFmu {
                 finite("the PMOR-Hertz rigid state", &[p.theta, p.omega].concat())?;
                 finite("the PMOR-Hertz state's torques", &p.torques_nm)?;
                 if let Some(o) = &s.pmor_outputs {
-                    finite("the PMOR-Hertz contact outputs", &[o.mesh_force_n, o.mesh_stiffness_n_per_m, o.stored_j])?;
+                    finite(
+                        "the PMOR-Hertz contact outputs",
+                        &[
+                            o.mesh_force_n,
+                            o.mesh_stiffness_n_per_m,
+                            o.stored_j,
+                            o.friction_force_n,
+                            o.friction_power_w,
+                            o.mesh_torque_nm[0],
+                            o.mesh_torque_nm[1],
+                        ],
+                    )?;
                 }
-                finite("the PMOR-Hertz energy terms", &[p.input_work_j, p.dissipated_j, s.start_energy_j])
+                finite(
+                    "the PMOR-Hertz energy terms",
+                    &[p.input_work_j, p.dissipated_j, p.friction_dissipated_j, s.start_energy_j],
+                )
             }
         }
     }

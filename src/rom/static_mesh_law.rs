@@ -192,14 +192,7 @@ pub struct StaticMeshLaw {
 }
 
 /// Where a static contact element touches, as a point u (m from T₁) of the transverse line of
-/// action: a conjugate contact's own, u = √(r₁² − r_b1²); a tip corner's is taken on the involute
-/// it touches (gear 2's flank for gear 1's corner: u = L − √(r₂² − r_b2²)), whose tangent the
-/// sliding follows.
+/// action (`mesh_kinematics::line_of_action_point_m`).
 pub fn contact_point_m(pair: &GearPair, e: &super::statics::ElementResult) -> f64 {
-    use crate::contact::mesh_kinematics::ContactKind;
-    let roll = |r: f64, rb: f64| (r * r - rb * rb).max(0.0).sqrt();
-    match e.kind {
-        ContactKind::TipOfGear1 => pair.loa_length_m() - roll(e.radius_m[1], pair.gear2.base_radius_m),
-        ContactKind::Conjugate | ContactKind::TipOfGear2 => roll(e.radius_m[0], pair.gear1.base_radius_m),
-    }
+    crate::contact::mesh_kinematics::line_of_action_point_m(pair, e.kind, e.radius_m)
 }

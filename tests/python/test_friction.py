@@ -4,8 +4,8 @@ The lumped FMUs whose mesh law and friction contacts come from the FE statics (`
 the default FE law) run slow, speed-held brake runs: the mesh loss over whole mesh cycles
 against ISO/TR 14179-2's gear loss factor H_V (evidence: the closed form, ``fmu-build inspect
 --json``), and the shaft-force outputs against F_t = T₁/r_w1, F_r = F_t·tan α_wt,
-F_a = F_t·tan β_w. The PMOR-Hertz FMU is frictionless so far: it refuses μ ≠ 0, and its
-shaft forces are checked at μ = 0. A slow torque reversal through zero speed runs without an
+F_a = F_t·tan β_w. The PMOR-Hertz spur FMU is checked the same way, frictionless and at
+μ = 0.05. A slow torque reversal through zero speed runs without an
 error, its friction dissipation never decreasing.
 """
 
@@ -141,29 +141,48 @@ def test_shaft_forces_against_the_closed_forms(friction_fmus, make_slave, name):
     assert a0 == pytest.approx(f_t * tan_beta_w, rel=0.01, abs=1e-6 * f_t)
 
 
-def test_pmor_hertz_fmu_is_frictionless_and_says_so(gear_fmus, make_slave):
-    """The PMOR-Hertz FMU carries no friction yet: friction_coefficient ≠ 0 is an fmi2Error (not
-    a silently frictionless run); at 0 its shaft forces follow the closed forms like the lumped
-    FMU's: F_t = T₁/r_w1 mean over a mesh cycle within 1 %, and no loss."""
-    from fmpy.fmi1 import FMICallException
-
+def test_the_pmor_hertz_fmu_carries_friction_as_the_lumped_one(gear_fmus, make_slave):
+    """The PMOR-Hertz spur FMU, brake-held at 200 Hz mesh frequency under its operating torque:
+    frictionless, its shaft forces meet F_t = T₁/r_w1 and F_r = F_t·tan α_wt within 1 % and it
+    loses nothing; with μ = 0.05 its mesh loss is within 10 % of ISO/TR 14179-2's μ·H_V
+    (evidence: the closed form), as the lumped FMU's is."""
     case = gear_fmus["spur-pmor"]
-    slave = make_slave(case, "pmor-friction")
-    with pytest.raises(FMICallException):
-        slave.fmu.setReal([slave.vr["friction_coefficient"]], [0.05])
     mesh = case.mesh
-    torque = 185.0
-    alpha = mesh["operating_pressure_angle_rad"]
-    r_w1 = mesh["base_radius_1_m"] / math.cos(alpha)
+    torque, r_w1, alpha = operating(mesh)
     z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
     w1 = 2 * math.pi * 200.0 / z1
-    run = make_slave(case, "pmor-forces", parameters={"w_1_start": w1, "w_2_start": w1 * z1 / z2},
-                     booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
-    _, (f_t, f_r, f_a, eta) = brake_held_run(run, mesh, torque, 200.0, 10, comm_step=2e-5 * 5)
-    print(f"PMOR-Hertz spur: F_t {f_t:.2f} N (T₁/r_w1 {torque / r_w1:.2f}), F_r {f_r:.2f} N, efficiency {eta}")
+    runs = {}
+    for mu in (0.0, 0.05):
+        slave = make_slave(case, f"pmor-friction-{mu}", parameters={"friction_coefficient": mu, "w_1_start": w1,
+                                                                     "w_2_start": w1 * z1 / z2},
+                           booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+        runs[mu] = brake_held_run(slave, mesh, torque, 200.0, 10)
+    loss_0, (f_t, f_r, f_a, eta_0) = runs[0.0]
+    loss, (f_t1, f_r1, _, eta) = runs[0.05]
+    h_v = mesh["gear_loss_factor_iso"]
+    print(f"PMOR-Hertz spur: frictionless F_t {f_t:.2f} N (T₁/r_w1 {torque / r_w1:.2f}), F_r {f_r:.2f} N "
+          f"({torque / r_w1 * math.tan(alpha):.2f}); μ = 0.05: loss {loss:.5f} of the input (efficiency {1 - loss:.5f}, "
+          f"mean instantaneous {eta:.5f}), μH_V {0.05 * h_v:.5f}, loss / ISO's {loss / (0.05 * h_v):.4f}; "
+          f"F_t {100 * (f_t1 / f_t - 1):+.3f} %, F_r {100 * (f_r1 / f_r - 1):+.3f} %")
     assert f_t == pytest.approx(torque / r_w1, rel=0.01)
     assert f_r == pytest.approx(torque / r_w1 * math.tan(alpha), rel=0.01)
-    assert f_a == 0.0 and eta == pytest.approx(1.0, abs=1e-12)
+    assert f_a == 0.0 and loss_0 == 0.0 and eta_0 == pytest.approx(1.0, abs=1e-12)
+    assert loss == pytest.approx(0.05 * h_v, rel=0.10)
+
+
+def test_a_friction_coefficient_out_of_range_is_refused(gear_fmus, make_slave):
+    """Outside [0, 0.3] friction_coefficient is an fmi2Error, on either FMU (not a silently
+    clipped value); 0.3 is taken."""
+    from fmpy.fmi1 import FMICallException
+
+    for name in ("spur", "spur-pmor"):
+        # Set in Initialization Mode, where a parameter may be set; an fmi2Error ends the
+        # instance (FMI 2.0): a fresh one per value.
+        for k, bad in enumerate((-0.01, 0.31, float("nan"))):
+            with pytest.raises(FMICallException):
+                make_slave(gear_fmus[name], f"refuse-{name}-{k}", parameters={"friction_coefficient": bad})
+        slave = make_slave(gear_fmus[name], f"accept-{name}", parameters={"friction_coefficient": 0.3})
+        assert slave.fmu.getReal([slave.vr["friction_coefficient"]]) == [0.3]
 
 
 def test_a_slow_reversal_through_zero_speed_runs_and_friction_only_dissipates(friction_fmus, make_slave):

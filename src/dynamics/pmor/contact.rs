@@ -27,7 +27,8 @@
 
 use super::equations::Stencil;
 use super::model::PmorModel;
-use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
+use crate::contact::mesh_kinematics::{line_of_action_point_m, ContactKind, Flank, PairPlacement, SectionContact};
+use crate::dynamics::mesh_friction::{ContactFriction, SlidingFriction};
 
 /// Angle step of the central differences ∂α/∂θ at tip corners (rad).
 const ANGLE_STEP: f64 = 1e-7;
@@ -62,6 +63,11 @@ pub struct ContactLoads {
     pub damping_force: [Vec<f64>; 2],
     pub damper_force_n: f64,
     pub damper_power_w: f64,
+    /// Tooth friction (`apply_tooth_friction`; zero without it): the friction forces' sum
+    /// (N, each signed as its sliding) and their power Σ f·v ≥ 0 (W). Its torques are part of
+    /// `force` and `damping_force`, as the damper's are.
+    pub friction_force_n: f64,
+    pub friction_power_w: f64,
     /// The loaded sections' rows, where asked for (the mesh damper, the quasi-static
     /// condensation's Newton): empty otherwise.
     pub sections: Vec<SectionRows>,
@@ -73,6 +79,9 @@ pub struct ContactLoads {
 #[derive(Debug, Clone)]
 pub struct SectionRows {
     pub flank_sign: f64,
+    /// The contact point u (m from T₁) on its flank's transverse line of action
+    /// (`mesh_kinematics::line_of_action_point_m`): tooth friction's arms are u and T₁T₂ − u.
+    pub point_m: f64,
     pub force_n: f64,
     pub stiffness_n_per_m: f64,
     /// Per gear over (θ, η_Φ, η_Ψ): ∂α/∂θ, then the band's rows of the basis along the flank
@@ -321,6 +330,7 @@ pub fn section_contact_loads(
     poses: [&GearPose; 2],
     loading: Loading,
     damper_n_s_per_m: f64,
+    friction: Option<SlidingFriction>,
     collect_rows: bool,
     flanks: &[Flank],
 ) -> Result<ContactLoads, String> {
@@ -332,7 +342,7 @@ pub fn section_contact_loads(
         ..Default::default()
     };
     let damped = damper_n_s_per_m > 0.0;
-    let collect = damped || collect_rows;
+    let collect = damped || collect_rows || friction.is_some();
     let mut sections_loaded: Vec<SectionRows> = Vec::new();
     let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
     let sections = layers.len() - 1;
@@ -385,6 +395,7 @@ pub fn section_contact_loads(
                 let beta = law.half_width(force);
                 let mut section = collect.then(|| SectionRows {
                     flank_sign: flank.sign(),
+                    point_m: line_of_action_point_m(p, c.kind, c.radius_m),
                     force_n: force,
                     stiffness_n_per_m: 1.0 / law.compliance(force),
                     rows: [0, 1].map(|i| vec![0.0; 1 + n_e[i]]),
@@ -461,6 +472,9 @@ pub fn section_contact_loads(
     if damped {
         apply_mesh_damper(model, poses, &sections_loaded, damper_n_s_per_m, &mut out);
     }
+    if let Some(law) = friction {
+        apply_tooth_friction(model, poses, &sections_loaded, law, &mut out);
+    }
     out.normal_force_n += out.damper_force_n;
     if collect_rows {
         out.sections = sections_loaded;
@@ -493,6 +507,33 @@ pub(super) fn apply_mesh_damper(
         }
         out.damper_force_n += section.flank_sign * damper;
         out.damper_power_w += damper * approach_rate;
+    }
+}
+
+/// Tooth friction on the loaded sections (`dynamics::mesh_friction`): on each, f = μF_s·v/√(v² + v_ε²)
+/// at the sliding v = θ̇₁u − θ̇₂(T₁T₂ − u) of the floating frames' rotation, with the torques
+/// −f·u on θ₁ and +f·(T₁T₂ − u) on θ₂ (the same on either flank: the mirrored pair's). It acts on
+/// the angles only: the friction's load on the elastic coordinates (the teeth bent along the
+/// flank) and the bodies' rates in the sliding are left out; F_s is the section's elastic force.
+/// Its torques are booked with the damping forces (the sign of Dq̇), so the integrator counts its
+/// work as dissipation.
+pub(super) fn apply_tooth_friction(
+    model: &PmorModel,
+    poses: [&GearPose; 2],
+    sections: &[SectionRows],
+    law: SlidingFriction,
+    out: &mut ContactLoads,
+) {
+    let loa = model.pair.loa_length_m();
+    let omega = [poses[0].velocity[0], poses[1].velocity[0]];
+    for section in sections {
+        let c = ContactFriction::at(law, loa, section.point_m, omega, section.force_n);
+        for i in 0..2 {
+            out.force[i][0] += c.torque_nm[i];
+            out.damping_force[i][0] -= c.torque_nm[i];
+        }
+        out.friction_force_n += c.force_n;
+        out.friction_power_w += c.power_w;
     }
 }
 

@@ -7,6 +7,7 @@ use super::equations::Stencil;
 use super::model::{FlankContact, PmorModel};
 use super::penalty::penalty_contact_loads;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
+use crate::dynamics::mesh_friction::SlidingFriction;
 
 /// Contact loads of the pair on both flanks; `restage` maps a gear's angle to its stencil (for
 /// the penalty law's differences).
@@ -17,6 +18,7 @@ use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 /// η̇_Ψ are left out on purpose: they are the stiff coordinates (the shapes against the Hertz
 /// contact near 100 kHz), and a damper on them makes those modes overdamped with a real
 /// eigenvalue near −c/m_shape ≈ −2·10⁶ s⁻¹ — an explicit step of 0.5 µs.
+/// Tooth friction, where given, on the loaded sections' sliding (`contact::apply_tooth_friction`).
 pub fn contact_loads(
     model: &PmorModel,
     place: &PairPlacement,
@@ -24,10 +26,14 @@ pub fn contact_loads(
     restage: &dyn Fn(usize, f64) -> Result<Stencil, String>,
     loading: Loading,
     damper_n_s_per_m: f64,
+    friction: Option<SlidingFriction>,
     collect_rows: bool,
 ) -> Result<ContactLoads, String> {
     if let FlankContact::Penalty { .. } = model.info.contact {
+        if friction.is_some() {
+            return Err("the standard PMOR reference (penalty contact) is the paper's frictionless model".into());
+        }
         return penalty_contact_loads(model, place, poses, restage, damper_n_s_per_m, collect_rows);
     }
-    section_contact_loads(model, place, poses, loading, damper_n_s_per_m, collect_rows, &Flank::BOTH)
+    section_contact_loads(model, place, poses, loading, damper_n_s_per_m, friction, collect_rows, &Flank::BOTH)
 }

@@ -554,6 +554,8 @@ impl<'a> PmorDynamics<'a> {
         y[..2 * n_q].copy_from_slice(&trial[..2 * n_q]);
         y[len - 2] += input;
         y[len - 1] += dissipated;
+        // Tooth friction's share, by the trapezoid of its power (each end ≥ 0: never decreasing).
+        s.friction_dissipated_j += 0.5 * h * (start.outputs.contact.friction_power_w + end.contact.friction_power_w);
         if y.iter().any(|x| !x.is_finite()) {
             return Err(format!("the PMOR-Hertz state became non-finite at step {h} s"));
         }

@@ -33,6 +33,7 @@ pub mod penalty;
 pub mod quasi_static;
 
 use crate::contact::mesh_kinematics::PairPlacement;
+use crate::dynamics::mesh_friction::SlidingFriction;
 use contact::{ContactLoads, GearPose, Loading};
 use contact_law::contact_loads;
 use equations::{gear_terms, Damping, GearTerms, Stencil};
@@ -59,6 +60,10 @@ pub struct PmorState {
     /// ∫Σ τᵢωᵢ dt and ∫η̇ᵀDη̇ dt (J): the energy balance's external terms.
     pub input_work_j: f64,
     pub dissipated_j: f64,
+    /// ∫Σ f·v dt (J): tooth friction's share of `dissipated_j`, by the trapezoid of its power over
+    /// each step (never decreasing; the discrete gradient's steps only).
+    #[serde(default)]
+    pub friction_dissipated_j: f64,
 }
 
 /// Energies and contact at one state.
@@ -93,6 +98,9 @@ pub struct PmorDynamics<'a> {
     /// leaves that mode almost undamped (`fmu-build linearize`); this is what damps it.
     /// Zero by default: the paper's model has modal damping only.
     pub mesh_damping_n_s_per_m: f64,
+    /// Tooth friction on the loaded sections (`contact::apply_tooth_friction`); none by default,
+    /// as the paper's model.
+    pub friction: Option<SlidingFriction>,
     /// How the contact force enters the elastic coordinates (the Hertz band by default).
     pub loading: Loading,
     /// The time integrator (the model's choice by default).
@@ -139,6 +147,7 @@ impl PmorModel {
             torques_nm: [0.0; 2],
             input_work_j: 0.0,
             dissipated_j: 0.0,
+            friction_dissipated_j: 0.0,
         };
         for i in 0..2 {
             s.anchor[i] = (theta[i] / self.gears[i].pitch_rad()).floor() as i64;
@@ -193,6 +202,7 @@ impl<'a> PmorDynamics<'a> {
             damping,
             added_inertia_kgm2,
             mesh_damping_n_s_per_m: 0.0,
+            friction: None,
             loading: Loading::HertzBand,
             integrator: model.integrator,
             gram_cache: Default::default(),
@@ -250,6 +260,7 @@ impl<'a> PmorDynamics<'a> {
         d.loading = self.loading;
         d.integrator = self.integrator;
         d.mesh_damping_n_s_per_m = mesh_damping_n_s_per_m;
+        d.friction = self.friction;
         d
     }
 
@@ -357,13 +368,13 @@ impl<'a> PmorDynamics<'a> {
         }
         let l = self.layout();
         let stencils = [self.stencil(0, anchor[0], y[l.q(0)])?, self.stencil(1, anchor[1], y[l.q(1)])?];
-        let damped = self.mesh_damping_n_s_per_m > 0.0;
+        let rates = self.mesh_damping_n_s_per_m > 0.0 || self.friction.is_some();
         let poses = [0, 1].map(|i| GearPose {
             theta: y[l.q(i)],
             anchor: anchor[i],
             stencil: stencils[i],
             eta: &y[l.q(i) + 1..l.q(i) + l.n_q[i]],
-            velocity: if damped { &y[l.v(i)..l.v(i) + l.n_q[i]] } else { &[] },
+            velocity: if rates { &y[l.v(i)..l.v(i) + l.n_q[i]] } else { &[] },
         });
         let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
         let contact = contact_loads(
@@ -373,11 +384,12 @@ impl<'a> PmorDynamics<'a> {
             &restage,
             self.loading,
             self.mesh_damping_n_s_per_m,
+            self.friction,
             false,
         )?;
         let mut dy = vec![0.0; y.len()];
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
-        let mut dissipation = contact.damper_power_w;
+        let mut dissipation = contact.damper_power_w + contact.friction_power_w;
         for i in 0..2 {
             let n = l.n_q[i];
             dy[l.q(i)..l.q(i) + n].copy_from_slice(&y[l.v(i)..l.v(i) + n]);

@@ -185,6 +185,7 @@ pub fn penalty_contact_loads(
             poses,
             super::contact::Loading::Point,
             0.0,
+            None,
             false,
             &[Flank::Coast],
         )
@@ -251,6 +252,8 @@ pub fn penalty_contact_loads(
                 }
                 let mut section = collect.then(|| SectionRows {
                     flank_sign: 1.0,
+                    // The penalty reference is frictionless: no arm is read.
+                    point_m: f64::NAN,
                     force_n: force,
                     stiffness_n_per_m: stiffness,
                     rows: [0, 1].map(|i| vec![0.0; 1 + n_e[i]]),

@@ -133,13 +133,13 @@ impl<'a> PmorDynamics<'a> {
         let (e0, e1) = (self.expand(qs, &l, y, 0, &z[0]), self.expand(qs, &l, y, 1, &z[1]));
         let expanded = [e0, e1];
         let stencils = [self.stencil(0, anchor[0], expanded[0].1)?, self.stencil(1, anchor[1], expanded[1].1)?];
-        let damped = self.mesh_damping_n_s_per_m > 0.0;
+        let rates = self.mesh_damping_n_s_per_m > 0.0 || self.friction.is_some();
         let poses = [0, 1].map(|i| GearPose {
             theta: expanded[i].1,
             anchor: anchor[i],
             stencil: stencils[i],
             eta: &expanded[i].0,
-            velocity: if damped { &expanded[i].2 } else { &[] },
+            velocity: if rates { &expanded[i].2 } else { &[] },
         });
         let restage = |i: usize, theta: f64| self.stencil(i, anchor[i], theta);
         let contact = contact_loads(
@@ -149,6 +149,7 @@ impl<'a> PmorDynamics<'a> {
             &restage,
             self.loading,
             self.mesh_damping_n_s_per_m,
+            self.friction,
             tangent,
         )?;
         let n_z = [z[0].len(), z[1].len()];
@@ -158,7 +159,7 @@ impl<'a> PmorDynamics<'a> {
         let mut shape_slope = [DVector::zeros(0), DVector::zeros(0)];
         let mut acceleration = vec![0.0; l.n_q[0] + l.n_q[1]];
         let mut out = PmorOutputs { damping_force: vec![0.0; l.n_q[0] + l.n_q[1]], ..Default::default() };
-        let mut dissipation = contact.damper_power_w;
+        let mut dissipation = contact.damper_power_w + contact.friction_power_w;
         let mut shape_damping = [DMatrix::zeros(0, 0), DMatrix::zeros(0, 0)];
         let mut fast_damping = DVector::zeros(n_z[0] + n_z[1]);
         for i in 0..2 {
