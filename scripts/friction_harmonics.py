@@ -1,6 +1,7 @@
 """Tooth friction's effect on the DTE and the mesh efficiency, through fmpy (issue 42).
 
-One lumped FMU (its law and friction contacts from the FE statics), μ = 0 and 0.05, two runs:
+Each gear-pair FMU given (lumped, its law and friction contacts from the FE statics, or PMOR-Hertz),
+μ = 0 and 0.05, two runs:
 
 * example 3: 185 N·m after a 5 ms haversine ramp, a viscous load of 20 N·m·s/rad, from rest, 25 ms
   (it ends at about 67 Hz mesh frequency); the last mesh cycle is analysed;
@@ -12,9 +13,10 @@ Per run it prints the DTE's amplitude at the mesh frequency's first four harmoni
 Fourier transform over whole mesh cycles) and the mean mesh efficiency, 1 − ΔE_loss/∫τ₁ω₁dt
 over the analysed cycles; it writes a PNG of the harmonics side by side.
 
-    target/release/fmu-build build examples/kurokawa_spur.toml --model lumped -o out/KurokawaSpurFriction.fmu
-    .venv/bin/python scripts/friction_harmonics.py examples/kurokawa_spur.toml out/KurokawaSpurFriction.fmu \\
-        --png docs/explanation/friction_harmonics.png
+    target/release/fmu-build build examples/kurokawa_spur.toml -o out/KurokawaSpur.fmu \\
+        --lumped-fmu out/KurokawaSpurLumped.fmu
+    .venv/bin/python scripts/friction_harmonics.py examples/kurokawa_spur.toml out/KurokawaSpur.fmu \\
+        out/KurokawaSpurLumped.fmu --png docs/explanation/friction_harmonics.png
 """
 
 from __future__ import annotations
@@ -93,71 +95,85 @@ def analyse(rows: np.ndarray, z1: int, cycles_from: float) -> dict:
             "mesh_hz": float(z1 * w_1[i0:i1 + 1].mean() / (2 * math.pi))}
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("spec", type=Path, help="the pair's spec (its inspect reads the FMU's law)")
-    parser.add_argument("fmu", type=Path, help="a lumped gear-pair FMU (fmu-build build --model lumped)")
-    parser.add_argument("--mesh-hz", type=float, default=1500.0, help="the at-speed run's mesh frequency")
-    parser.add_argument("--mu", type=float, default=0.05)
-    parser.add_argument("--png", type=Path)
-    args = parser.parse_args()
-    md = read_model_description(str(args.fmu))
+def harmonics_with_and_without_friction(fmu: Path, spec: Path, mesh_hz: float, mu: float) -> dict:
+    """{(run, μ): analyse(…)} for one FMU, μ = 0 and `mu`."""
+    md = read_model_description(str(fmu))
     if not any(v.name == "friction_coefficient" for v in md.modelVariables):
-        raise SystemExit(f"{args.fmu} has no friction_coefficient: rebuild it")
-    unzipped = extract(str(args.fmu))
-    # The pair's teeth, inertias and operating torque, from the FMU's own law.
+        raise SystemExit(f"{fmu} has no friction_coefficient: rebuild it")
+    unzipped = extract(str(fmu))
+    # The pair's teeth and operating torque from its spec (the geometry alone: no FE), the
+    # inertias from the FMU's own start values (the PMOR-Hertz FMU's are its FE gears').
     with tempfile.TemporaryDirectory() as tmp:
-        dump = Path(tmp) / "mesh.json"
-        subprocess.run(["target/release/fmu-build", "inspect", str(args.spec), "--json", str(dump), "--from-fmu",
-                        str(args.fmu)], check=True, capture_output=True)
+        dump = Path(tmp) / "pair.json"
+        subprocess.run(["target/release/fmu-build", "inspect", str(spec), "--mesh-law", "analytic", "--json",
+                        str(dump)], check=True, capture_output=True)
         mesh = json.loads(dump.read_text())
+    for v in md.modelVariables:
+        if v.name in ("inertia_1", "inertia_2"):
+            mesh[f"{v.name}_kgm2"] = float(v.start)
     z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
     ratio = z2 / z1
     results = {}
-    for mu in (0.0, args.mu):
+    for friction in (0.0, mu):
         # Example 3.
-        slave, vr = open_slave(args.fmu, unzipped, f"ex3-{mu}", {"friction_coefficient": mu}, False, (0.0, 0.0))
+        slave, vr = open_slave(fmu, unzipped, f"ex3-{friction}", {"friction_coefficient": friction}, False,
+                               (0.0, 0.0))
 
         def example3(t, w_2):
             return (185.0 * (0.5 * (1 - math.cos(math.pi * t / 5e-3)) if t < 5e-3 else 1.0), -20.0 * w_2)
 
         rows = run(slave, vr, 1250, 2e-5, example3)
-        results[("example 3", mu)] = analyse(rows, z1, 0.0)
+        results[("example 3", friction)] = analyse(rows, z1, 0.0)
         # At speed, brake-held.
         torque = mesh["operating_torque_nm"]
-        w2_target = 2 * math.pi * args.mesh_hz / z2
+        w2_target = 2 * math.pi * mesh_hz / z2
         gain = (mesh["inertia_2_kgm2"] + mesh["inertia_1_kgm2"] * ratio**2) / 0.01
-        slave, vr = open_slave(args.fmu, unzipped, f"speed-{mu}",
-                               {"friction_coefficient": mu, "w_1_start": w2_target * ratio, "w_2_start": w2_target},
+        slave, vr = open_slave(fmu, unzipped, f"speed-{friction}",
+                               {"friction_coefficient": friction, "w_1_start": w2_target * ratio,
+                                "w_2_start": w2_target},
                                True, (torque, -torque * ratio))
         h = 1e-5
-        steps = round(61 / args.mesh_hz / h)
+        steps = round(61 / mesh_hz / h)
         rows = run(slave, vr, steps, h, lambda t, w_2: (torque, -torque * ratio - gain * (w_2 - w2_target)))
-        results[("at speed", mu)] = analyse(rows, z1, 40.0)
-    for (case, mu), r in results.items():
-        print(f"{case:9s} μ = {mu:4.2f}: mesh {r['mesh_hz']:7.1f} Hz over {r['cycles']:2d} cycles, DTE mean "
-              f"{r['mean_um']:.3f} µm, harmonics 1–{HARMONICS} "
-              + " / ".join(f"{a:.4f}" for a in r["harmonics_um"]) + f" µm, mean efficiency {r['efficiency']:.5f}")
+        results[("at speed", friction)] = analyse(rows, z1, 40.0)
+    return results
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("spec", type=Path, help="the pair's spec (its teeth and operating torque)")
+    parser.add_argument("fmus", type=Path, nargs="+", help="gear-pair FMUs of that spec (lumped or PMOR-Hertz)")
+    parser.add_argument("--mesh-hz", type=float, default=1500.0, help="the at-speed run's mesh frequency")
+    parser.add_argument("--mu", type=float, default=0.05)
+    parser.add_argument("--png", type=Path)
+    args = parser.parse_args()
+    results = {fmu: harmonics_with_and_without_friction(fmu, args.spec, args.mesh_hz, args.mu) for fmu in args.fmus}
+    for fmu, by_run in results.items():
+        for (case, mu), r in by_run.items():
+            print(f"{fmu.stem}: {case:9s} μ = {mu:4.2f}: mesh {r['mesh_hz']:7.1f} Hz over {r['cycles']:2d} cycles, "
+                  f"DTE mean {r['mean_um']:.3f} µm, harmonics 1–{HARMONICS} "
+                  + " / ".join(f"{a:.4f}" for a in r["harmonics_um"]) + f" µm, mean efficiency {r['efficiency']:.5f}")
     if args.png:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-        for ax, case in zip(axes, ("example 3", "at speed")):
-            k = np.arange(1, HARMONICS + 1)
-            for offset, mu in ((-0.18, 0.0), (0.18, args.mu)):
-                r = results[(case, mu)]
-                ax.bar(k + offset, r["harmonics_um"], width=0.36,
-                       label=f"μ = {mu:g}" + (f", η = {100 * r['efficiency']:.2f} %" if mu else ""))
-            r = results[(case, 0.0)]
-            ax.set_title(f"{case}: {r['mesh_hz']:.0f} Hz mesh frequency")
-            ax.set_xlabel("harmonic of the mesh frequency")
-            ax.set_ylabel("DTE amplitude (µm)")
-            ax.set_xticks(k)
-            ax.legend()
-        fig.suptitle(f"{args.fmu.stem}: tooth friction and the DTE's mesh harmonics (lumped FMU)")
+        fig, axes = plt.subplots(len(args.fmus), 2, figsize=(10, 3.4 * len(args.fmus)), squeeze=False)
+        for row, fmu in zip(axes, args.fmus):
+            for ax, case in zip(row, ("example 3", "at speed")):
+                k = np.arange(1, HARMONICS + 1)
+                for offset, mu in ((-0.18, 0.0), (0.18, args.mu)):
+                    r = results[fmu][(case, mu)]
+                    ax.bar(k + offset, r["harmonics_um"], width=0.36,
+                           label=f"μ = {mu:g}" + (f", η = {100 * r['efficiency']:.2f} %" if mu else ""))
+                r = results[fmu][(case, 0.0)]
+                ax.set_title(f"{fmu.stem}, {case}: {r['mesh_hz']:.0f} Hz mesh frequency", fontsize=10)
+                ax.set_xlabel("harmonic of the mesh frequency")
+                ax.set_ylabel("DTE amplitude (µm)")
+                ax.set_xticks(k)
+                ax.legend()
+        fig.suptitle("Tooth friction and the DTE's mesh harmonics")
         fig.tight_layout()
         fig.savefig(args.png, dpi=110)
         print(f"wrote {args.png}")
