@@ -375,14 +375,15 @@ impl<'a> LumpedModel<'a> {
         out
     }
 
-    /// The instantaneous mesh efficiency 1 − P_loss/P_in, P_in the power the driving gear puts into
-    /// the mesh: gear 1's, −(its mesh torque)·ω₁, or gear 2's where gear 1's is not positive;
-    /// 1 where no power enters (at rest).
+    /// The instantaneous mesh efficiency 1 − P_loss/P_in, P_in the power the gears put into the
+    /// mesh, Σ max(0, −(mesh torque on gear i)·ωᵢ); 1 where none enters (at rest). In a
+    /// transient (a load reversal, an impact) the mesh can pay friction from its stored energy,
+    /// and the value then falls below 0: the mean over whole mesh cycles is the efficiency.
     pub fn mesh_efficiency(&self, mesh: &MeshState, s: &LumpedState) -> f64 {
         let m = self.mesh;
         let into_1 = (m.base_radius_1_m * (mesh.force_n - mesh.roll_force_n) - mesh.friction.torque_nm[0]) * s.omega_1;
         let into_2 = -(m.base_radius_2_m * mesh.force_n + mesh.friction.torque_nm[1]) * s.omega_2;
-        let input = if into_1 > 0.0 { into_1 } else { into_2 };
+        let input = into_1.max(0.0) + into_2.max(0.0);
         if input > 0.0 {
             1.0 - mesh.friction.power_w / input
         } else {

@@ -179,7 +179,7 @@ struct MeshLosses {
 /// kept and none were asked for), the bores' speeds and the friction's work so far. The
 /// normal force F_n acts along the line of action in the normal plane (F_bt = F_n·cos β_b; a tip
 /// corner's force is taken along it too); the friction along the flanks' tangent. The power into
-/// the mesh is the driving gear's −(contact torque on its bore)·θ̇.
+/// the mesh is what the gears put in, Σ max(0, −(contact torque on bore i)·θ̇ᵢ).
 fn pmor_losses(
     pair: &crate::gear::GearPair,
     contact: Option<&PmorPortOutputs>,
@@ -196,8 +196,7 @@ fn pmor_losses(
         };
     };
     let cos_bb = pair.base_helix_angle_rad.cos();
-    let into = [0, 1].map(|i| -o.mesh_torque_nm[i] * bore_speeds[i]);
-    let input = if into[0] > 0.0 { into[0] } else { into[1] };
+    let input: f64 = (0..2).map(|i| (-o.mesh_torque_nm[i] * bore_speeds[i]).max(0.0)).sum();
     MeshLosses {
         shaft: ShaftForce::of(
             o.mesh_force_n * cos_bb,
