@@ -103,6 +103,9 @@ pub(crate) fn inspect(
             "operating_pressure_angle_rad": pair.operating_pressure_angle_rad,
             "base_helix_angle_rad": pair.base_helix_angle_rad,
             "overlap_ratio": pair.overlap_ratio,
+            "path_start_m": pair.path_start_m,
+            "path_end_m": pair.path_end_m,
+            "pitch_point_m": pair.pitch_point_m(),
             "gear_loss_factor_iso": h_v.as_ref().ok(),
             "gear_loss_factor_uniform_load": gear_loss_factor_uniform_load(&pair),
             "mesh_law": match mesh.law_source {

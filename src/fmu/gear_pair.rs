@@ -48,10 +48,11 @@ pub enum Var {
     MeshPowerLoss,
     MeshEfficiency,
     MeshEnergyLoss,
+    FrictionRegularization,
 }
 
 impl Var {
-    pub const ALL: [Var; 27] = [
+    pub const ALL: [Var; 28] = [
         Var::Tau1,
         Var::Tau2,
         Var::Phi1,
@@ -79,6 +80,7 @@ impl Var {
         Var::MeshPowerLoss,
         Var::MeshEfficiency,
         Var::MeshEnergyLoss,
+        Var::FrictionRegularization,
     ];
 
     pub fn name(self) -> &'static str {
@@ -110,6 +112,7 @@ impl Var {
             Var::MeshPowerLoss => "mesh_power_loss",
             Var::MeshEfficiency => "mesh_efficiency",
             Var::MeshEnergyLoss => "mesh_energy_loss",
+            Var::FrictionRegularization => "friction_regularization",
         }
     }
 
@@ -892,6 +895,7 @@ impl Model for GearPairFmu {
             Var::MeshPowerLoss => losses.power_loss_w,
             Var::MeshEfficiency => losses.efficiency,
             Var::MeshEnergyLoss => losses.energy_loss_j,
+            Var::FrictionRegularization => s.params.sliding_regularization_m_per_s,
             Var::Phi1Start => s.start.theta_1,
             Var::Phi2Start => s.start.theta_2,
             Var::W1Start => s.start.omega_1,

@@ -186,6 +186,63 @@ def test_a_friction_coefficient_out_of_range_is_refused(gear_fmus, make_slave):
 
 
 @pytest.mark.parametrize("kind", ["lumped", "pmor-hertz"])
+def test_the_friction_force_changes_sign_at_the_pitch_point(friction_fmus, gear_fmus, make_slave, kind):
+    """Evidence: a single tooth pair's sliding (closed form). Where one pair carries the load (the
+    FMU's `contact_pairs`) the friction force is μF_n·v/√(v² + v_ε²), v = ω₁u − ω₂(T₁T₂ − u), zero
+    at the pitch point C at the rigid speed ratio: negative in the approach, positive in the
+    recess, Coulomb's ±μF_n beyond the regularization (v_ε the FMU's `friction_regularization`;
+    the mesh's own vibration, δ̇ = r_b1ω₁ − r_b2ω₂, slides the flanks at mm/s near C). u is the contact point: the reference mesh
+    position puts a pair at C, and the contact point is read on gear 1's involute, u = C + r_b1·φ₁
+    modulo the base pitch. Read off the outputs of a
+    quasi-static brake-held run (200 Hz mesh frequency, μ = 0.05): friction is the part of the
+    tangential shaft force the normal force does not make, Σf = (F_t − F_bt·cos α_wt)/sin α_wt.
+    Within 0.05 of μF_n."""
+    mesh = friction_fmus["kurokawa_spur"].mesh
+    case = friction_fmus["kurokawa_spur"] if kind == "lumped" else gear_fmus["spur-pmor"]
+    torque, _, alpha = operating(mesh)
+    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
+    rb1, rb2, pb, c = mesh["base_radius_1_m"], mesh["base_radius_2_m"], mesh["base_pitch_m"], mesh["pitch_point_m"]
+    single = (mesh["path_end_m"] - pb, mesh["path_start_m"] + pb)
+    loa = (rb1 + rb2) * math.tan(alpha)
+    w1 = 2 * math.pi * 200.0 / z1
+    slave = make_slave(case, f"sign-{kind}", parameters={"friction_coefficient": 0.05, "w_1_start": w1,
+                                                         "w_2_start": w1 * z1 / z2},
+                       booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+    vr = slave.vr
+    eps = slave.fmu.getReal([vr["friction_regularization"]])[0]
+    refs = [vr[n] for n in ("phi_1", "w_1", "w_2", "mesh_force", "force_tangential")]
+    gain = (mesh["inertia_2_kgm2"] + mesh["inertia_1_kgm2"] * (z2 / z1) ** 2) / 0.01
+    h, t, samples = 2e-5, 0.0, []
+    for _ in range(round(0.25 / h)):
+        phi_1, w_1, w_2, force, f_t = slave.fmu.getReal(refs)
+        pairs = slave.fmu.getInteger([vr["contact_pairs"]])[0]
+        slave.set_inputs(torque, -torque * z2 / z1 - gain * (w_2 - w1 * z1 / z2))
+        slave.step(t, h)
+        t += h
+        if t < 0.05:
+            continue
+        u = c + ((rb1 * phi_1 + 0.5 * pb) % pb - 0.5 * pb)
+        v = w_1 * u - w_2 * (loa - u)
+        ratio = (f_t - force * math.cos(alpha)) / math.sin(alpha) / (0.05 * force)
+        samples.append((u, pairs, ratio, v / math.hypot(v, eps)))
+    # Where one pair is under load (the FMU's own count: under load the next pair touches before
+    # the rigid geometry's zone ends, by about 1 mm on the Kurokawa spur pair), less two of the
+    # lumped law's rows at each end (its count is the nearest row's, its friction a blend of two).
+    lo = min(u for u, pairs, *_ in samples if pairs == 1) + 2 * pb / 128
+    hi = max(u for u, pairs, *_ in samples if pairs == 1) - 2 * pb / 128
+    assert single[0] < lo < c < hi < single[1], "one loaded pair only inside the rigid single-contact zone"
+    core = [(u, ratio, closed) for u, _, ratio, closed in samples if lo < u < hi]
+    worst = max(abs(ratio - closed) for _, ratio, closed in core)
+
+    signs = {math.copysign(1.0, ratio) for _, ratio, _ in core}
+    print(f"{kind}: {len(core)} samples with one loaded pair, {(lo - c) * 1e3:+.2f} … {(hi - c) * 1e3:+.2f} mm from C "
+          f"(the rigid zone {(single[0] - c) * 1e3:+.2f} … {(single[1] - c) * 1e3:+.2f}), v_ε {eps * 1e3:.2f} mm/s: "
+          f"Σf/(μF_n) within {worst:.4f} of the single pair's")
+    assert signs == {-1.0, 1.0} and len(core) > 100
+    assert worst < 0.05
+
+
+@pytest.mark.parametrize("kind", ["lumped", "pmor-hertz"])
 def test_a_slow_reversal_through_zero_speed_runs_and_friction_only_dissipates(friction_fmus, gear_fmus, make_slave,
                                                                                 kind):
     """Gear 1's torque reverses slowly (cosine over 0.4 s, ±T₁) against a viscous brake, from rest:

@@ -42,6 +42,7 @@ def test_model_description_matches_contract(fmi_case):
         "force_tangential": ("output", "Real"), "force_radial": ("output", "Real"),
         "force_axial": ("output", "Real"), "mesh_power_loss": ("output", "Real"),
         "mesh_efficiency": ("output", "Real"), "mesh_energy_loss": ("output", "Real"),
+        "friction_regularization": ("output", "Real"),
     }
     for name, (causality, type_) in expected.items():
         assert name in variables, f"missing variable {name}"
