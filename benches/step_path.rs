@@ -1,7 +1,7 @@
 //! What one PMOR-Hertz doStep costs at operating speed, and what of it is the integration
 //! (issue 39), measured in release mode:
 //!
-//!     cargo bench --bench step_path [-- FMU ... [--torque-nm=T] [--inertia-factor=F]]
+//!     cargo bench --bench step_path [-- FMU ... [--torque-nm=T] [--inertia-factor=F] [--friction=μ]]
 //!
 //! (default: out/KurokawaSpur.fmu out/SmallHelical.fmu). The case is issue 38's brake case: both
 //! gears start at synchronous speed, gear 1 carries T₁ (`--torque-nm`, else the pair's operating
@@ -24,6 +24,7 @@
 //! builds the spur one; the helical one: `./target/release/fmu-build build
 //! examples/small_helical.toml -o out/SmallHelical.fmu`).
 use fmi_sys::fmi2::*;
+use gearfmu::dynamics::mesh_friction::SlidingFriction;
 use gearfmu::dynamics::pmor::PmorDynamics;
 use gearfmu::fmi2::exports::*;
 use gearfmu::interface::value_reference;
@@ -92,8 +93,16 @@ struct Run {
 /// own ω₂. Timed one right after the other, the pair shares the machine's state (clock,
 /// caches, a neighbour's load): their difference is the doStep's own cost. Each gear's
 /// `inertia_i` is `inertia_factor` times its FE value (1: the FMU's default; 2: a gear on a
-/// shaft, the real-time table's "×2").
-fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64, inertia_factor: f64) -> Result<Run, String> {
+/// shaft, the real-time table's "×2"). With `friction` > 0 both carry tooth friction of that
+/// coefficient, the dynamics with the regularization the FMU set (its `friction_regularization`).
+fn lockstep(
+    u: &Unpacked,
+    pair: &Pair,
+    mesh_hz: f64,
+    h: f64,
+    inertia_factor: f64,
+    friction: f64,
+) -> Result<Run, String> {
     let ModelKind::PmorHertz(model) = &u.file.model else { return Err("not a PMOR-Hertz FMU".into()) };
     let (omega, brake) = brake_case(pair, mesh_hz);
     // The integration alone: one dynamics object for the whole run, as the FMU's defaults make it.
@@ -134,10 +143,24 @@ fn lockstep(u: &Unpacked, pair: &Pair, mesh_hz: f64, h: f64, inertia_factor: f64
     let result = (|| {
         ok(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), "fmi2SetupExperiment")?;
         ok(fmi2EnterInitializationMode(c), "fmi2EnterInitializationMode")?;
-        let start = [vr("w_1_start"), vr("w_2_start"), vr("tau_1"), vr("tau_2"), vr("inertia_1"), vr("inertia_2")];
-        let values = [omega[0], omega[1], pair.torque_1_nm, -brake * omega[1], inertia[0], inertia[1]];
-        ok(fmi2SetReal(c, start.as_ptr(), 6, values.as_ptr()), "fmi2SetReal")?;
+        let start = [
+            vr("w_1_start"),
+            vr("w_2_start"),
+            vr("tau_1"),
+            vr("tau_2"),
+            vr("inertia_1"),
+            vr("inertia_2"),
+            vr("friction_coefficient"),
+        ];
+        let values = [omega[0], omega[1], pair.torque_1_nm, -brake * omega[1], inertia[0], inertia[1], friction];
+        ok(fmi2SetReal(c, start.as_ptr(), start.len(), values.as_ptr()), "fmi2SetReal")?;
         ok(fmi2ExitInitializationMode(c), "fmi2ExitInitializationMode")?;
+        if friction > 0.0 {
+            let mut regularization = 0.0;
+            ok(fmi2GetReal(c, &vr("friction_regularization"), 1, &mut regularization), "fmi2GetReal")?;
+            dynamics.friction = Some(SlidingFriction { coefficient: friction, regularization_m_per_s: regularization });
+            s = dynamics.start_state([0.0; 2], omega, [pair.torque_1_nm, -brake * omega[1]])?;
+        }
         let (inputs, w2_ref) = ([vr("tau_1"), vr("tau_2")], vr("w_2"));
         let n = (END_S / h).round() as usize;
         let mut run = Run {
@@ -189,11 +212,15 @@ fn main() {
         .iter()
         .find_map(|a| a.strip_prefix("--inertia-factor="))
         .map_or(1.0, |t| t.parse().expect("--inertia-factor=F: inertia_i over the FE value"));
+    let friction: f64 = args
+        .iter()
+        .find_map(|a| a.strip_prefix("--friction="))
+        .map_or(0.0, |t| t.parse().expect("--friction=μ: the tooth friction coefficient"));
     if fmus.is_empty() {
         fmus = vec![root.join("out/KurokawaSpur.fmu"), root.join("out/SmallHelical.fmu")];
     }
     println!("T₁: {}", torque_nm.map_or("each pair's operating torque".to_string(), |t| format!("{t} N·m")));
-    println!("inertia_i: {inertia_factor} × the FE value");
+    println!("inertia_i: {inertia_factor} × the FE value; tooth friction μ = {friction}");
     println!(
         "| FMU | mesh frequency | coupling | µs per doStep (C API) | µs per advance | overhead µs | internal steps | solves | evaluations | µs per solve | µs per evaluation | real-time factor (C API) |"
     );
@@ -217,7 +244,7 @@ fn main() {
         let name = fmu.file_stem().and_then(|s| s.to_str()).unwrap_or("?");
         for (mesh_hz, h) in CASES {
             let row = (0..ROUNDS)
-                .map(|_| lockstep(&u, &pair, mesh_hz, h, inertia_factor))
+                .map(|_| lockstep(&u, &pair, mesh_hz, h, inertia_factor, friction))
                 .collect::<Result<Vec<Run>, String>>();
             let row = row.map(|runs| {
                 let all = |f: fn(&Run) -> &Vec<f64>| median(runs.iter().flat_map(|r| f(r).iter().copied()).collect());
