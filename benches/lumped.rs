@@ -2,7 +2,7 @@
 //!
 //! Baseline, run in the same process: the same RK4 on the same two inertias with a constant mesh
 //! stiffness k̄ (the simplest lumped gear model: no tables, no backlash). Reported: ns per internal
-//! RK4 step (ratio to the baseline), ns per doStep through the exported C functions, and the
+//! RK4 step (ratio to the baseline; with tooth friction, μ 0.05, ratio to the frictionless step), ns per doStep through the exported C functions, and the
 //! seed's 25 ms example (185 N·m haversine ramp, viscous 20 N·m·s/rad) as a real-time factor at
 //! max_step 1 µs and 10 µs.
 
@@ -100,9 +100,27 @@ fn main() {
         let steps = 200_000;
         let h = 1e-6;
 
+        // The same with tooth friction (μ 0.05, v_ε as the FMU sets it at this step).
+        let mut with_friction = gearfmu::dynamics::lumped::LumpedParameters {
+            friction_coefficient: 0.05,
+            ..gearfmu::dynamics::lumped::LumpedParameters::defaults(&mesh)
+        };
+        with_friction.sliding_regularization_m_per_s =
+            gearfmu::dynamics::lumped::sliding_regularization_m_per_s(&mesh, &with_friction, h);
+        let friction_model = LumpedModel::new(&mesh, with_friction);
+
         let mut lumped = Vec::new();
+        let mut friction = Vec::new();
         let mut base = Vec::new();
         for _ in 0..7 {
+            let mut s = LumpedState::default();
+            let t0 = Instant::now();
+            for k in 0..steps {
+                s = friction_model.rk4_step(&s, [seed_torque(k as f64 * h), -20.0 * s.omega_2], h);
+            }
+            black_box(s);
+            friction.push(t0.elapsed().as_secs_f64() / steps as f64);
+
             let mut s = LumpedState::default();
             let t0 = Instant::now();
             for k in 0..steps {
@@ -124,12 +142,14 @@ fn main() {
             black_box(b);
             base.push(t0.elapsed().as_secs_f64() / steps as f64);
         }
-        let (lumped, base) = (median(lumped), median(base));
+        let (lumped, friction, base) = (median(lumped), median(friction), median(base));
         println!(
-            "{name}: internal RK4 step {:.1} ns; baseline (constant k̄) {:.1} ns; ratio {:.2}",
+            "{name}: internal RK4 step {:.1} ns; baseline (constant k̄) {:.1} ns; ratio {:.2}; with tooth friction (μ 0.05) {:.1} ns, {:.2} × the frictionless step",
             lumped * 1e9,
             base * 1e9,
-            lumped / base
+            lumped / base,
+            friction * 1e9,
+            friction / lumped
         );
 
         println!(
