@@ -1094,7 +1094,10 @@ impl Model for GearPairFmu {
                 energy_balance([s.start_energy_j, end.total_energy_j()], [state.input_work_j, state.dissipated_j])?;
                 s.pmor = Some(state);
                 s.pmor_outputs = Some(PmorPortOutputs::of(&end));
-                let warnings = self.validity.check(end.contact.normal_force_n, &mut s.warned);
+                // The rules' forces are along the transverse line of action (the lumped model's);
+                // the sections' force is normal to the flanks: F_bt = F_n·cos β_b.
+                let transverse = end.contact.normal_force_n * model.pair.base_helix_angle_rad.cos();
+                let warnings = self.validity.check(transverse, &mut s.warned);
                 s.pending_warnings.extend(warnings);
                 return Ok(());
             }

@@ -141,33 +141,40 @@ def test_shaft_forces_against_the_closed_forms(friction_fmus, make_slave, name):
     assert a0 == pytest.approx(f_t * tan_beta_w, rel=0.01, abs=1e-6 * f_t)
 
 
-def test_the_pmor_hertz_fmu_carries_friction_as_the_lumped_one(gear_fmus, make_slave):
-    """The PMOR-Hertz spur FMU, brake-held at 200 Hz mesh frequency under its operating torque:
-    frictionless, its shaft forces meet F_t = T₁/r_w1 and F_r = F_t·tan α_wt within 1 % and it
-    loses nothing; with μ = 0.05 its mesh loss is within 10 % of ISO/TR 14179-2's μ·H_V
-    (evidence: the closed form), as the lumped FMU's is."""
-    case = gear_fmus["spur-pmor"]
+@pytest.mark.parametrize("name", ["spur-pmor", "helical-pmor"])
+def test_the_pmor_hertz_fmu_carries_friction_as_the_lumped_one(gear_fmus, make_slave, name):
+    """The PMOR-Hertz FMUs of the Kurokawa pairs, brake-held at 200 Hz mesh frequency under their
+    operating torque: frictionless, their shaft forces meet F_t = T₁/r_w1, F_r = F_t·tan α_wt and
+    F_a = F_t·tan β_w within 1 % and they lose nothing; with μ = 0.05 the spur pair's mesh loss is
+    within 10 % of ISO/TR 14179-2's μ·H_V, the helical pair's (ε_β 1.2: load on inclined contact
+    lines, not H_V's spur sharing) of the uniform-load form μ·H_V,u (evidence: the closed forms),
+    as the lumped FMUs' are."""
+    case = gear_fmus[name]
     mesh = case.mesh
     torque, r_w1, alpha = operating(mesh)
     z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
     w1 = 2 * math.pi * 200.0 / z1
+    tan_beta_w = math.tan(mesh["base_helix_angle_rad"]) / math.cos(alpha)
     runs = {}
     for mu in (0.0, 0.05):
-        slave = make_slave(case, f"pmor-friction-{mu}", parameters={"friction_coefficient": mu, "w_1_start": w1,
-                                                                     "w_2_start": w1 * z1 / z2},
+        slave = make_slave(case, f"{name}-friction-{mu}", parameters={"friction_coefficient": mu, "w_1_start": w1,
+                                                                       "w_2_start": w1 * z1 / z2},
                            booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
         runs[mu] = brake_held_run(slave, mesh, torque, 200.0, 10)
     loss_0, (f_t, f_r, f_a, eta_0) = runs[0.0]
     loss, (f_t1, f_r1, _, eta) = runs[0.05]
-    h_v = mesh["gear_loss_factor_iso"]
-    print(f"PMOR-Hertz spur: frictionless F_t {f_t:.2f} N (T₁/r_w1 {torque / r_w1:.2f}), F_r {f_r:.2f} N "
-          f"({torque / r_w1 * math.tan(alpha):.2f}); μ = 0.05: loss {loss:.5f} of the input (efficiency {1 - loss:.5f}, "
-          f"mean instantaneous {eta:.5f}), μH_V {0.05 * h_v:.5f}, loss / ISO's {loss / (0.05 * h_v):.4f}; "
-          f"F_t {100 * (f_t1 / f_t - 1):+.3f} %, F_r {100 * (f_r1 / f_r - 1):+.3f} %")
+    h_v, h_u = mesh["gear_loss_factor_iso"], mesh["gear_loss_factor_uniform_load"]
+    helical = mesh["overlap_ratio"] > 0.5
+    print(f"{name}: frictionless F_t {f_t:.2f} N (T₁/r_w1 {torque / r_w1:.2f}), F_r {f_r:.2f} N "
+          f"({torque / r_w1 * math.tan(alpha):.2f}), F_a {f_a:.2f} N ({torque / r_w1 * tan_beta_w:.2f}); μ = 0.05: "
+          f"loss {loss:.5f} of the input (efficiency {1 - loss:.5f}, mean instantaneous {eta:.5f}), μH_V {0.05 * h_v:.5f}, "
+          f"μH_V,u {0.05 * h_u:.5f}; loss / ISO's {loss / (0.05 * h_v):.4f}; F_t {100 * (f_t1 / f_t - 1):+.3f} %, "
+          f"F_r {100 * (f_r1 / f_r - 1):+.3f} %")
     assert f_t == pytest.approx(torque / r_w1, rel=0.01)
     assert f_r == pytest.approx(torque / r_w1 * math.tan(alpha), rel=0.01)
-    assert f_a == 0.0 and loss_0 == 0.0 and eta_0 == pytest.approx(1.0, abs=1e-12)
-    assert loss == pytest.approx(0.05 * h_v, rel=0.10)
+    assert f_a == pytest.approx(torque / r_w1 * tan_beta_w, rel=0.01, abs=1e-6 * f_t)
+    assert loss_0 == 0.0 and eta_0 == pytest.approx(1.0, abs=1e-12)
+    assert loss == pytest.approx(0.05 * (h_u if helical else h_v), rel=0.10)
 
 
 def test_a_friction_coefficient_out_of_range_is_refused(gear_fmus, make_slave):
