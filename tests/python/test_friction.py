@@ -146,7 +146,7 @@ def test_the_pmor_hertz_fmu_carries_friction_as_the_lumped_one(gear_fmus, make_s
     """The PMOR-Hertz FMUs of the Kurokawa pairs, brake-held at 200 Hz mesh frequency under their
     operating torque: frictionless, their shaft forces meet F_t = T₁/r_w1, F_r = F_t·tan α_wt and
     F_a = F_t·tan β_w within 1 % and they lose nothing; with μ = 0.05 the spur pair's mesh loss is
-    within 10 % of ISO/TR 14179-2's μ·H_V, the helical pair's (ε_β 1.2: load on inclined contact
+    within 10 % of ISO/TR 14179-2's μ·H_V, the helical pair's (ε_β 0.73: load on inclined contact
     lines, not H_V's spur sharing) of the uniform-load form μ·H_V,u (evidence: the closed forms),
     as the lumped FMUs' are."""
     case = gear_fmus[name]
