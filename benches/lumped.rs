@@ -109,25 +109,23 @@ fn main() {
             gearfmu::dynamics::lumped::sliding_regularization_m_per_s(&mesh, &with_friction, h);
         let friction_model = LumpedModel::new(&mesh, with_friction);
 
-        let mut lumped = Vec::new();
-        let mut friction = Vec::new();
-        let mut base = Vec::new();
-        for _ in 0..7 {
-            let mut s = LumpedState::default();
-            let t0 = Instant::now();
-            for k in 0..steps {
-                s = friction_model.rk4_step(&s, [seed_torque(k as f64 * h), -20.0 * s.omega_2], h);
-            }
-            black_box(s);
-            friction.push(t0.elapsed().as_secs_f64() / steps as f64);
-
+        // Seconds per RK4 step of the seed example's drive.
+        let per_step = |model: &LumpedModel| {
             let mut s = LumpedState::default();
             let t0 = Instant::now();
             for k in 0..steps {
                 s = model.rk4_step(&s, [seed_torque(k as f64 * h), -20.0 * s.omega_2], h);
             }
             black_box(s);
-            lumped.push(t0.elapsed().as_secs_f64() / steps as f64);
+            t0.elapsed().as_secs_f64() / steps as f64
+        };
+
+        let mut lumped = Vec::new();
+        let mut friction = Vec::new();
+        let mut base = Vec::new();
+        for _ in 0..7 {
+            friction.push(per_step(&friction_model));
+            lumped.push(per_step(&model));
 
             let (rb, j) = (
                 [mesh.base_radius_1_m, mesh.base_radius_2_m],

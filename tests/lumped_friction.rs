@@ -7,6 +7,7 @@ use gearfmu::closed_forms::gear_loss::{gear_loss_factor, gear_loss_factor_unifor
 use gearfmu::dynamics::lumped::{
     sliding_regularization_m_per_s, LumpedMesh, LumpedModel, LumpedParameters, LumpedState, MeshState,
 };
+use gearfmu::dynamics::mesh_friction::ContactFriction;
 use gearfmu::gear::{GearPair, PairSpec};
 use std::path::Path;
 
@@ -34,13 +35,20 @@ fn static_state(mesh: &LumpedMesh, roll_m: f64, force_n: f64, omega_1: f64) -> L
 }
 
 /// The mesh at `samples` roll positions over one base pitch, quasi-statically at T₁.
-fn mesh_cycle(model: &LumpedModel, torque_nm: f64, omega_1: f64, samples: usize) -> Vec<(f64, MeshState)> {
+fn mesh_cycle(
+    model: &LumpedModel,
+    torque_nm: f64,
+    omega_1: f64,
+    samples: usize,
+) -> Vec<(f64, MeshState, ContactFriction)> {
     let m = model.mesh;
     let force = torque_nm / m.base_radius_1_m;
     (0..samples)
         .map(|i| {
             let roll = m.base_pitch_m * (i as f64 + 0.5) / samples as f64;
-            (roll, model.mesh_state(&static_state(m, roll, force, omega_1)))
+            let state = static_state(m, roll, force, omega_1);
+            let mesh = model.mesh_state(&state);
+            (roll, mesh, model.friction(&mesh, &state))
         })
         .collect()
 }
@@ -65,7 +73,7 @@ fn quasi_static_efficiency_against_iso_tr_14179_2() {
         let model = LumpedModel::new(&mesh, params(&mesh, mu, 0.05));
         let omega_1 = 50.0;
         let cycle = mesh_cycle(&model, p.operating_torque_nm, omega_1, 2048);
-        let loss: f64 = cycle.iter().map(|(_, m)| m.friction.power_w).sum::<f64>() / cycle.len() as f64;
+        let loss: f64 = cycle.iter().map(|(_, _, f)| f.power_w).sum::<f64>() / cycle.len() as f64;
         let input = p.operating_torque_nm * omega_1;
         let h_v = gear_loss_factor(&p).unwrap();
         let uniform = gear_loss_factor_uniform_load(&p);
@@ -104,16 +112,18 @@ fn friction_torque_changes_sign_at_the_pitch_point_as_a_single_pairs_arm() {
         // is ξ = u − u_A (the analytic law's pairs touch at u_A + ξ + j·p_b).
         let u = single.0 + (single.1 - single.0) * i as f64 / 40.0;
         let roll = u - p.path_start_m;
-        let m = model.mesh_state(&static_state(&mesh, roll, force, omega_1));
+        let state = static_state(&mesh, roll, force, omega_1);
+        let m = model.mesh_state(&state);
+        let friction = model.friction(&m, &state);
         let v = omega_1 * k * (u - c);
         let eps = model.params.sliding_regularization_m_per_s;
         let closed = -mu * m.force_n * u * v / (v * v + eps * eps).sqrt();
         assert!(
-            (m.friction.torque_nm[0] - closed).abs() < 1e-6 * closed.abs().max(1e-3),
+            (friction.torque_nm[0] - closed).abs() < 1e-6 * closed.abs().max(1e-3),
             "u = {u:.5} m: friction torque {} vs the single pair's {closed} N·m",
-            m.friction.torque_nm[0]
+            friction.torque_nm[0]
         );
-        signs.push((u < c, m.friction.torque_nm[0] > 0.0));
+        signs.push((u < c, friction.torque_nm[0] > 0.0));
     }
     assert!(
         signs.iter().all(|&(approach, helps)| approach == helps),
@@ -184,9 +194,9 @@ fn shaft_forces_match_the_closed_forms_and_friction_moves_them_along_the_flank_t
             let model = LumpedModel::new(&mesh, params(&mesh, mu, 0.05));
             let cycle = mesh_cycle(&model, torque, 50.0, 1024);
             let n = cycle.len() as f64;
-            let sum = cycle.iter().fold([0.0; 4], |a, (_, m)| {
-                let f = model.shaft_force(m);
-                [a[0] + f.tangential_n / n, a[1] + f.radial_n / n, a[2] + f.axial_n / n, a[3] + m.friction.force_n / n]
+            let sum = cycle.iter().fold([0.0; 4], |a, (_, m, friction)| {
+                let f = model.shaft_force(m, friction);
+                [a[0] + f.tangential_n / n, a[1] + f.radial_n / n, a[2] + f.axial_n / n, a[3] + friction.force_n / n]
             });
             sum
         };

@@ -1400,16 +1400,14 @@ fn the_discrete_gradient_books_damping_and_input_work_in_the_energy_balance() {
 /// loses μ·H_V-scale power, D_f is most of D, and the balance closes as without friction.
 #[test]
 fn the_discrete_gradient_books_tooth_friction_in_the_energy_balance() {
-    use gearfmu::dynamics::mesh_friction::{friction_reach_per_kg, regularization_for_step_m_per_s, SlidingFriction};
+    use gearfmu::dynamics::mesh_friction::{regularization_for_pair_m_per_s, SlidingFriction};
     let f = fixture();
     let m = &f.model;
     let (mut dynamics, h) = verlet_at_its_default_step(f, Condensation::QuasiStatic);
     dynamics.integrator = Integrator::DiscreteGradient;
     let p = &m.pair;
     let inertia = [m.gears[0].polar_inertia_kgm2, m.gears[1].polar_inertia_kgm2];
-    let reach = friction_reach_per_kg(p.loa_length_m(), [p.path_start_m, p.path_end_m], inertia);
-    let yield_normal = gearfmu::closed_forms::rating::yield_mesh_force_n(p) / p.base_helix_angle_rad.cos();
-    let eps = regularization_for_step_m_per_s(0.05, yield_normal, reach, h, 1.0);
+    let eps = regularization_for_pair_m_per_s(p, 0.05, inertia, h, 1.0);
     dynamics.friction = Some(SlidingFriction { coefficient: 0.05, regularization_m_per_s: eps });
     let rb = base_radii(m);
     let torques = [200.0, -0.8 * 200.0 * rb[1] / rb[0]];

@@ -245,8 +245,6 @@ pub struct MeshState {
     pub stiffness_n_per_m: f64,
     /// Elastic energy V (J).
     pub potential_j: f64,
-    /// Tooth friction on the loaded contacts (zero without friction or contact).
-    pub friction: ContactFriction,
 }
 
 /// The force the mesh puts on gear 2's shaft (N), contact and friction together, in the pair's
@@ -348,54 +346,58 @@ impl<'a> LumpedModel<'a> {
             out.stiffness_n_per_m = law.stiffness_n_per_m;
             out.potential_j = law.potential_j;
         }
-        let mu = self.params.friction_coefficient;
-        if mu > 0.0 && out.force_n != 0.0 {
-            // The drive flank's contacts travel from T₁ towards T₂ as ξ grows, the coast flank's
-            // (its mirror image) the other way.
-            let (spread, levels, travel) = if out.force_n > 0.0 {
-                (&m.drive_spread, &m.drive.force_levels_n, 1.0)
-            } else {
-                (&m.coast_spread, &m.coast.force_levels_n, -1.0)
-            };
-            let transverse = out.force_n.abs();
-            let law =
-                SlidingFriction { coefficient: mu, regularization_m_per_s: self.params.sliding_regularization_m_per_s };
-            out.friction = spread.friction(
-                law,
-                m.base_pitch_m,
-                m.loa_m,
-                levels,
-                transverse,
-                transverse / m.cos_base_helix,
-                xi,
-                travel,
-                [s.omega_1, s.omega_2],
-            );
-        }
         out
+    }
+
+    /// Tooth friction on the loaded contacts of `mesh` (the mesh state at `s`; zero without
+    /// friction or contact). Apart from `mesh_state`, so that what reads only the mesh force or
+    /// the energy does not pay for it.
+    pub fn friction(&self, mesh: &MeshState, s: &LumpedState) -> ContactFriction {
+        let m = self.mesh;
+        let mu = self.params.friction_coefficient;
+        if mu == 0.0 || mesh.force_n == 0.0 {
+            return ContactFriction::default();
+        }
+        // The drive flank's contacts travel from T₁ towards T₂ as ξ grows, the coast flank's
+        // (its mirror image) the other way.
+        let (spread, table, travel) =
+            if mesh.force_n > 0.0 { (&m.drive_spread, &m.drive, 1.0) } else { (&m.coast_spread, &m.coast, -1.0) };
+        let transverse = mesh.force_n.abs();
+        let law =
+            SlidingFriction { coefficient: mu, regularization_m_per_s: self.params.sliding_regularization_m_per_s };
+        spread.friction(
+            law,
+            table,
+            m.loa_m,
+            transverse,
+            transverse / m.cos_base_helix,
+            m.base_radius_1_m * s.theta_1 + m.roll_offset_m,
+            travel,
+            [s.omega_1, s.omega_2],
+        )
     }
 
     /// The instantaneous mesh efficiency 1 − P_loss/P_in, P_in the power the gears put into the
     /// mesh, Σ max(0, −(mesh torque on gear i)·ωᵢ); 1 where none enters (at rest). In a
     /// transient (a load reversal, an impact) the mesh can pay friction from its stored energy,
     /// and the value then falls below 0: the mean over whole mesh cycles is the efficiency.
-    pub fn mesh_efficiency(&self, mesh: &MeshState, s: &LumpedState) -> f64 {
+    pub fn mesh_efficiency(&self, mesh: &MeshState, friction: &ContactFriction, s: &LumpedState) -> f64 {
         let m = self.mesh;
-        let into_1 = (m.base_radius_1_m * (mesh.force_n - mesh.roll_force_n) - mesh.friction.torque_nm[0]) * s.omega_1;
-        let into_2 = -(m.base_radius_2_m * mesh.force_n + mesh.friction.torque_nm[1]) * s.omega_2;
+        let into_1 = (m.base_radius_1_m * (mesh.force_n - mesh.roll_force_n) - friction.torque_nm[0]) * s.omega_1;
+        let into_2 = -(m.base_radius_2_m * mesh.force_n + friction.torque_nm[1]) * s.omega_2;
         let input = into_1.max(0.0) + into_2.max(0.0);
         if input > 0.0 {
-            1.0 - mesh.friction.power_w / input
+            1.0 - friction.power_w / input
         } else {
             1.0
         }
     }
 
     /// The force the mesh puts on gear 2's shaft at a state ([`ShaftForce`]; gear 1's is its opposite).
-    pub fn shaft_force(&self, mesh: &MeshState) -> ShaftForce {
+    pub fn shaft_force(&self, mesh: &MeshState, friction: &ContactFriction) -> ShaftForce {
         let m = self.mesh;
         let tan_bb = (1.0 - m.cos_base_helix * m.cos_base_helix).sqrt() / m.cos_base_helix;
-        ShaftForce::of(mesh.force_n, mesh.friction.force_n, m.operating_pressure_angle_rad, tan_bb)
+        ShaftForce::of(mesh.force_n, friction.force_n, m.operating_pressure_angle_rad, tan_bb)
     }
 
     /// Tooth pairs in contact at a state (an output only: the step path does not read it), from
@@ -417,11 +419,12 @@ impl<'a> LumpedModel<'a> {
     pub fn derivative(&self, s: &LumpedState, torques: [f64; 2]) -> LumpedState {
         let m = self.mesh;
         let mesh = self.mesh_state(s);
+        let friction = self.friction(&mesh, s);
         let delta_dot = m.base_radius_1_m * s.omega_1 - m.base_radius_2_m * s.omega_2;
         let torque_1 = torques[0] - m.base_radius_1_m * mesh.force_n
             + m.base_radius_1_m * mesh.roll_force_n
-            + mesh.friction.torque_nm[0];
-        let torque_2 = torques[1] + m.base_radius_2_m * mesh.force_n + mesh.friction.torque_nm[1];
+            + friction.torque_nm[0];
+        let torque_2 = torques[1] + m.base_radius_2_m * mesh.force_n + friction.torque_nm[1];
         LumpedState {
             theta_1: s.omega_1,
             omega_1: torque_1 / self.params.inertia_1_kgm2,
@@ -429,7 +432,7 @@ impl<'a> LumpedModel<'a> {
             omega_2: torque_2 / self.params.inertia_2_kgm2,
             input_work_j: torques[0] * s.omega_1 + torques[1] * s.omega_2,
             dissipated_j: (mesh.force_n - mesh.elastic_force_n) * delta_dot,
-            friction_dissipated_j: mesh.friction.power_w,
+            friction_dissipated_j: friction.power_w,
         }
     }
 

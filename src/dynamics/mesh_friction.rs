@@ -53,6 +53,21 @@ pub fn friction_reach_per_kg(loa_m: f64, path_m: [f64; 2], inertia_kgm2: [f64; 2
     reach(path_m[0]).max(reach(path_m[1]))
 }
 
+/// v_ε for the pair's own geometry and a step h (m/s): `regularization_for_step_m_per_s` with F_n
+/// the yield force (the largest the models answer for, `rating::yield_mesh_force_n`, over
+/// cos β_b) on the gears' inertias J (kg·m²), at h·λ = `step_times_rate`.
+pub fn regularization_for_pair_m_per_s(
+    pair: &crate::gear::GearPair,
+    coefficient: f64,
+    inertia_kgm2: [f64; 2],
+    step_s: f64,
+    step_times_rate: f64,
+) -> f64 {
+    let reach = friction_reach_per_kg(pair.loa_length_m(), [pair.path_start_m, pair.path_end_m], inertia_kgm2);
+    let normal = crate::closed_forms::rating::yield_mesh_force_n(pair) / pair.base_helix_angle_rad.cos();
+    regularization_for_step_m_per_s(coefficient, normal, reach, step_s, step_times_rate)
+}
+
 /// The friction law: Coulomb's μ, regularized below v_ε.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlidingFriction {
@@ -194,19 +209,18 @@ impl ContactSpread {
         out
     }
 
-    /// The friction of the mesh force F_n ≥ 0 (along the flank normals) at roll ξ (m, the law's
-    /// coordinate, rows ξᵢ = i·p_b/N), the gears at speeds ω. Between rows the contacts travel
-    /// with the roll, `travel` (±1) m along the line of action per m of roll (+1 on the drive
-    /// flank; −1 on the coast flank, whose contacts run from gear 1's tip to its root), and the
-    /// two rows' frictions are blended linearly, as the law's deflections are; so are two force
-    /// levels about F_n's (`levels_n` the law's, along the transverse line of action: F_n·cos β_b).
+    /// The friction of the mesh force F_n ≥ 0 (along the flank normals) at roll ξ (m), on the
+    /// rows and force levels of `table`, the flank's mesh law this spread was made beside.
+    /// Between rows the contacts travel with the roll, `travel` (±1) m along the line of action
+    /// per m of roll (+1 on the drive flank; −1 on the coast flank, whose contacts run from gear
+    /// 1's tip to its root), and the two rows' frictions are blended linearly, as the law's
+    /// deflections are; so are two force levels about the transverse force F_n·cos β_b.
     #[allow(clippy::too_many_arguments)]
     pub fn friction(
         &self,
         law: SlidingFriction,
-        base_pitch_m: f64,
+        table: &super::mesh_law::MeshLaw,
         loa_m: f64,
-        levels_n: &[f64],
         transverse_force_n: f64,
         normal_force_n: f64,
         roll_m: f64,
@@ -217,14 +231,11 @@ impl ContactSpread {
         if law.coefficient == 0.0 || normal_force_n <= 0.0 {
             return out;
         }
-        let n = self.rows();
-        let dx = base_pitch_m / n as f64;
-        let pos = roll_m.rem_euclid(base_pitch_m) / dx;
-        let i = (pos.floor() as usize).min(n - 1);
-        let t = pos - i as f64;
-        let m = levels_n.partition_point(|&x| x <= transverse_force_n).clamp(1, levels_n.len() - 1) - 1;
-        let s = ((transverse_force_n - levels_n[m]) / (levels_n[m + 1] - levels_n[m])).clamp(0.0, 1.0);
-        for (row, row_weight, shift) in [(i, 1.0 - t, t * dx), ((i + 1) % n, t, (t - 1.0) * dx)] {
+        let dx = table.base_pitch_m / table.rows() as f64;
+        let (i, j, t) = table.row_position(roll_m);
+        let (m, s) = table.level_position(transverse_force_n);
+        let s = s.clamp(0.0, 1.0);
+        for (row, row_weight, shift) in [(i, 1.0 - t, t * dx), (j, t, (t - 1.0) * dx)] {
             for (level, level_weight) in [(m, 1.0 - s), (m + 1, s)] {
                 let weight = row_weight * level_weight;
                 if weight == 0.0 {
@@ -297,9 +308,15 @@ mod tests {
         let nodes: Vec<Vec<(f64, f64)>> =
             (0..rows * 3).map(|n| vec![(1.0, 0.02 + pitch * (n / 3) as f64 / rows as f64)]).collect();
         let spread = ContactSpread::from_contacts(3, pitch, &nodes).unwrap();
+        // The law whose rows and levels the spread was made beside (its deflections unread here).
+        let table = crate::dynamics::mesh_law::MeshLaw::new(
+            pitch,
+            levels.to_vec(),
+            (0..rows * 3).map(|n| 1e-6 * (n % 3) as f64).collect(),
+        );
         let omega = [50.0, 50.0];
         for xi in [0.0013, 0.0047, 0.0081] {
-            let got = spread.friction(LAW, pitch, loa, &levels, 1500.0, 1500.0, xi, 1.0, omega);
+            let got = spread.friction(LAW, &table, loa, 1500.0, 1500.0, xi, 1.0, omega);
             let want = ContactFriction::at(LAW, loa, 0.02 + xi, omega, 1500.0);
             assert!((got.torque_nm[0] - want.torque_nm[0]).abs() < 1e-9, "{xi}: {got:?} vs {want:?}");
             assert!((got.power_w - want.power_w).abs() < 1e-9 * want.power_w.abs());

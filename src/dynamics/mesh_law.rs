@@ -97,12 +97,8 @@ impl MeshLaw {
     /// Evaluates the law; zero for δ ≤ δ₀(ξ) (the flanks do not touch). Beyond the last level
     /// the last segment is extended.
     pub fn evaluate(&self, delta_m: f64, roll_m: f64) -> MeshForce {
-        let n = self.rows();
-        let dx = self.base_pitch_m / n as f64;
-        let pos = roll_m.rem_euclid(self.base_pitch_m) / dx;
-        let i = (pos.floor() as usize).min(n - 1);
-        let t = pos - i as f64;
-        let j = (i + 1) % n;
+        let dx = self.base_pitch_m / self.rows() as f64;
+        let (i, j, t) = self.row_position(roll_m);
         let (a, b) = (self.row(i), self.row(j));
         let at = |k: usize| (1.0 - t) * a[k] + t * b[k];
         if delta_m <= at(0) {
@@ -141,16 +137,27 @@ impl MeshLaw {
 
     /// Static deflection at force F and roll ξ (the static transmission error under F).
     pub fn static_deflection(&self, force_n: f64, roll_m: f64) -> f64 {
+        let (i, j, t) = self.row_position(roll_m);
+        let (m, s) = self.level_position(force_n);
+        let d = |row: &[f64]| row[m] + s * (row[m + 1] - row[m]);
+        (1.0 - t) * d(self.row(i)) + t * d(self.row(j))
+    }
+
+    /// Where roll ξ falls between the rows: (i, i + 1 modulo N, t) with ξ = (i + t)·p_b/N modulo
+    /// p_b, t in [0, 1).
+    pub fn row_position(&self, roll_m: f64) -> (usize, usize, f64) {
         let n = self.rows();
-        let dx = self.base_pitch_m / n as f64;
-        let pos = roll_m.rem_euclid(self.base_pitch_m) / dx;
+        let pos = roll_m.rem_euclid(self.base_pitch_m) / (self.base_pitch_m / n as f64);
         let i = (pos.floor() as usize).min(n - 1);
-        let t = pos - i as f64;
+        (i, (i + 1) % n, pos - i as f64)
+    }
+
+    /// Where force F falls between the levels: (m, s) with F = F_m + s·(F_{m+1} − F_m); s leaves
+    /// [0, 1] beyond the first and last segments.
+    pub fn level_position(&self, force_n: f64) -> (usize, f64) {
         let f = &self.force_levels_n;
         let m = f.partition_point(|&x| x <= force_n).clamp(1, f.len() - 1) - 1;
-        let s = (force_n - f[m]) / (f[m + 1] - f[m]);
-        let d = |row: &[f64]| row[m] + s * (row[m + 1] - row[m]);
-        (1.0 - t) * d(self.row(i)) + t * d(self.row((i + 1) % n))
+        (m, (force_n - f[m]) / (f[m + 1] - f[m]))
     }
 
     /// Secant stiffness F / mean-over-ξ static deflection (N/m): what ISO 6336-1's c_γα measures.

@@ -823,10 +823,14 @@ impl Model for GearPairFmu {
                 let m = model.mesh_state(&s.mech);
                 let theta = [s.mech.theta_1, s.mech.theta_2];
                 let omega = [s.mech.omega_1, s.mech.omega_2];
+                // Friction (the bulk of an evaluation on a helical pair) only for what reads it.
+                let reads_friction =
+                    matches!(var, Var::ForceTangential | Var::ForceRadial | Var::MeshPowerLoss | Var::MeshEfficiency);
+                let friction = if reads_friction { model.friction(&m, &s.mech) } else { Default::default() };
                 let losses = MeshLosses {
-                    shaft: model.shaft_force(&m),
-                    power_loss_w: m.friction.power_w,
-                    efficiency: model.mesh_efficiency(&m, &s.mech),
+                    shaft: model.shaft_force(&m, &friction),
+                    power_loss_w: friction.power_w,
+                    efficiency: model.mesh_efficiency(&m, &friction, &s.mech),
                     energy_loss_j: s.mech.friction_dissipated_j,
                 };
                 ((theta, theta, omega), m.force_n, m.stiffness_n_per_m, losses)
@@ -963,17 +967,14 @@ impl Model for GearPairFmu {
         if let Physics::PmorHertz { model, .. } = &self.physics {
             // Friction's regularization: the narrowest band the discrete gradient's fixed point on
             // friction contracts in at this step, under the yield force.
-            use crate::dynamics::mesh_friction::{friction_reach_per_kg, regularization_for_step_m_per_s};
-            let pair = &model.pair;
             let p = &s.params;
-            let reach = friction_reach_per_kg(
-                pair.loa_length_m(),
-                [pair.path_start_m, pair.path_end_m],
+            s.params.sliding_regularization_m_per_s = crate::dynamics::mesh_friction::regularization_for_pair_m_per_s(
+                &model.pair,
+                p.friction_coefficient,
                 [p.inertia_1_kgm2, p.inertia_2_kgm2],
+                s.max_step_s,
+                1.0,
             );
-            let normal = self.validity.yield_mesh_force_n / pair.base_helix_angle_rad.cos();
-            s.params.sliding_regularization_m_per_s =
-                regularization_for_step_m_per_s(p.friction_coefficient, normal, reach, s.max_step_s, 1.0);
         }
         if let Physics::Lumped(mesh) = &self.physics {
             // Friction's regularization: the narrowest band RK4 stays stable in at this step.

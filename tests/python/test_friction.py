@@ -78,6 +78,17 @@ def brake_held_run(slave, mesh: dict, torque: float, mesh_hz: float, cycles: int
     return (loss - start_loss) / work, sums
 
 
+def synchronous_slave(make_slave, case: GearCase, instance: str, mesh: dict, torque: float, mu: float,
+                      mesh_hz: float = 200.0):
+    """An instance at rest in its static equilibrium under T₁ against the balancing brake,
+    turning at the rigid speeds of `mesh_hz` mesh frequency, with friction μ."""
+    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
+    w1 = 2 * math.pi * mesh_hz / z1
+    return make_slave(case, instance, parameters={"friction_coefficient": mu, "w_1_start": w1,
+                                                  "w_2_start": w1 * z1 / z2},
+                      booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+
+
 def operating(mesh: dict) -> tuple[float, float, float]:
     """The operating torque, r_w1 and the operating pressure angle."""
     alpha = mesh["operating_pressure_angle_rad"]
@@ -94,11 +105,7 @@ def test_quasi_static_efficiency_against_iso_tr_14179_2(friction_fmus, make_slav
     mesh = case.mesh
     torque, _, _ = operating(mesh)
     mu = 0.05
-    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
-    w1 = 2 * math.pi * 200.0 / z1
-    slave = make_slave(case, f"eff-{name}", parameters={"friction_coefficient": mu, "w_1_start": w1,
-                                                         "w_2_start": w1 * z1 / z2},
-                       booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+    slave = synchronous_slave(make_slave, case, f"eff-{name}", mesh, torque, mu)
     loss_share, (_, _, _, eta_mean) = brake_held_run(slave, mesh, torque, 200.0, 20)
     h_v, h_u = mesh["gear_loss_factor_iso"], mesh["gear_loss_factor_uniform_load"]
     helical = mesh["overlap_ratio"] > 0.5
@@ -121,15 +128,11 @@ def test_shaft_forces_against_the_closed_forms(friction_fmus, make_slave, name):
     case = friction_fmus[name]
     mesh = case.mesh
     torque, r_w1, alpha = operating(mesh)
-    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
-    w1 = 2 * math.pi * 200.0 / z1
     f_t = torque / r_w1
     tan_beta_w = math.tan(mesh["base_helix_angle_rad"]) / math.cos(alpha)
     means = {}
     for mu in (0.0, 0.05):
-        slave = make_slave(case, f"forces-{name}-{mu}", parameters={"friction_coefficient": mu, "w_1_start": w1,
-                                                                     "w_2_start": w1 * z1 / z2},
-                           booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+        slave = synchronous_slave(make_slave, case, f"forces-{name}-{mu}", mesh, torque, mu)
         _, means[mu] = brake_held_run(slave, mesh, torque, 200.0, 20)
     t0, r0, a0, _ = means[0.0]
     t1, r1, a1, _ = means[0.05]
@@ -152,14 +155,10 @@ def test_the_pmor_hertz_fmu_carries_friction_as_the_lumped_one(gear_fmus, make_s
     case = gear_fmus[name]
     mesh = case.mesh
     torque, r_w1, alpha = operating(mesh)
-    z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
-    w1 = 2 * math.pi * 200.0 / z1
     tan_beta_w = math.tan(mesh["base_helix_angle_rad"]) / math.cos(alpha)
     runs = {}
     for mu in (0.0, 0.05):
-        slave = make_slave(case, f"{name}-friction-{mu}", parameters={"friction_coefficient": mu, "w_1_start": w1,
-                                                                       "w_2_start": w1 * z1 / z2},
-                           booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+        slave = synchronous_slave(make_slave, case, f"{name}-friction-{mu}", mesh, torque, mu)
         runs[mu] = brake_held_run(slave, mesh, torque, 200.0, 10)
     loss_0, (f_t, f_r, f_a, eta_0) = runs[0.0]
     loss, (f_t1, f_r1, _, eta) = runs[0.05]
@@ -212,9 +211,7 @@ def test_the_friction_force_changes_sign_at_the_pitch_point(friction_fmus, gear_
     single = (mesh["path_end_m"] - pb, mesh["path_start_m"] + pb)
     loa = (rb1 + rb2) * math.tan(alpha)
     w1 = 2 * math.pi * 200.0 / z1
-    slave = make_slave(case, f"sign-{kind}", parameters={"friction_coefficient": 0.05, "w_1_start": w1,
-                                                         "w_2_start": w1 * z1 / z2},
-                       booleans={"start_at_equilibrium": True}, inputs=(torque, -torque * z2 / z1))
+    slave = synchronous_slave(make_slave, case, f"sign-{kind}", mesh, torque, 0.05)
     vr = slave.vr
     eps = slave.fmu.getReal([vr["friction_regularization"]])[0]
     refs = [vr[n] for n in ("phi_1", "w_1", "w_2", "mesh_force", "force_tangential")]
