@@ -104,3 +104,25 @@ fn yield_strength_must_be_positive() {
     let spec = edit("density_kg_m3 = 7700.0", "density_kg_m3 = 7700.0\nyield_strength_mpa = -5.0");
     assert!(refused(&spec).contains("material.yield_strength_mpa"));
 }
+
+/// `[friction]`: a constant μ, or ISO/TR 14179-2's law with its inputs (X_L defaulting to mineral
+/// oil's 1.0); the two laws' fields are not mixed, and each rule names its field.
+#[test]
+fn friction_law_fields() {
+    let with = |section: &str| format!("{SPUR}\n[friction]\n{section}\n");
+    let law = "law = \"iso-tr-14179-2\"\noil_viscosity_mpa_s = 30.0\nroughness_ra_um = 0.5";
+    let pair = GearPair::from_spec(&PairSpec::from_toml(&with(law)).unwrap()).unwrap();
+    let flanks = pair.lubricated_flanks.expect("the law");
+    assert_eq!((flanks.oil_viscosity_mpa_s, flanks.roughness_ra_um, flanks.lubricant_factor), (30.0, 0.5, 1.0));
+    assert_eq!(pair.friction_coefficient, 0.0);
+    let e = refused(&with(&format!("{law}\ncoefficient = 0.05")));
+    assert!(e.contains("friction.coefficient") && e.contains("left out"), "{e}");
+    let e = refused(&with("law = \"iso-tr-14179-2\"\noil_viscosity_mpa_s = 30.0"));
+    assert!(e.contains("friction.roughness_ra_um") && e.contains("required"), "{e}");
+    let e = refused(&with(&format!("{law}\nlubricant_factor = 5.0")));
+    assert!(e.contains("friction.lubricant_factor") && e.contains("[0.1, 2]"), "{e}");
+    let e = refused(&with("coefficient = 0.05\nroughness_ra_um = 0.5"));
+    assert!(e.contains("friction.roughness_ra_um") && e.contains("law"), "{e}");
+    let e = refused(&with("law = \"iso\""));
+    assert!(e.contains("law"), "{e}");
+}

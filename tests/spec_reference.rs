@@ -8,7 +8,7 @@
 use gearfmu::fe::gear_mesh::{MeshSpec, ProfileGrading};
 use gearfmu::gear::modification::{ModificationSpec, ReliefShape};
 use gearfmu::gear::spec::{
-    FrictionSpec, GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec,
+    FrictionLawSpec, FrictionSpec, GearSpec, HelixHand, LumpedSpec, MaterialSpec, MountingSpec, OperatingSpec, RackSpec,
 };
 use gearfmu::gear::{HertzContact, PairSpec};
 
@@ -66,7 +66,14 @@ fn full_spec() -> PairSpec {
         gear2: gear(31),
         lumped: LumpedSpec { hertz_contact: HertzContact::Weber },
         operating: OperatingSpec { torque_nm: Some(250.0) },
-        friction: FrictionSpec { coefficient: 0.05 },
+        // Both laws' fields, though a valid spec sets one law's (the walk needs every key).
+        friction: FrictionSpec {
+            coefficient: 0.05,
+            law: FrictionLawSpec::IsoTr14179_2,
+            oil_viscosity_mpa_s: Some(30.0),
+            roughness_ra_um: Some(0.5),
+            lubricant_factor: Some(1.0),
+        },
         mesh: MeshSpec {
             elements_across_tooth: 4,
             elements_along_profile: 8,

@@ -95,6 +95,9 @@ pub(crate) fn build(
     if let (Some(why), true) = (frictionless_only, pair.friction_coefficient != 0.0) {
         anyhow::bail!("{}: friction.coefficient = {}: {why}; set it to 0", spec.display(), pair.friction_coefficient);
     }
+    if let (Some(why), true) = (frictionless_only, pair.lubricated_flanks.is_some()) {
+        anyhow::bail!("{}: friction.law = \"iso-tr-14179-2\": {why}; leave the law out", spec.display());
+    }
     let so = library_bytes(library)?;
     match model {
         ModelChoice::Lumped => {

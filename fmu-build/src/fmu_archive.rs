@@ -44,6 +44,8 @@ pub(crate) fn library_bytes(library: Option<PathBuf>) -> Result<Vec<u8>> {
 pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u8]) -> Result<()> {
     let pair = pair.clone();
     let guid = ModelFile::compute_guid(interface::VARIABLES_TOML, &pair.name, &kind);
+    // ISO/TR 14179-2's inputs: the spec's, or the law unset.
+    let lubrication = pair.lubricated_flanks.unwrap_or_default();
     let (starts, description) = match &kind {
         ModelKind::Lumped(mesh) => (
             [
@@ -52,6 +54,9 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
                 ("mesh_damping_ratio", mesh.mesh_damping_ratio),
                 ("max_step", gearfmu::fmu::gear_pair::LUMPED_DEFAULT_MAX_STEP_S),
                 ("friction_coefficient", mesh.friction_coefficient),
+                ("oil_viscosity", lubrication.oil_viscosity_mpa_s),
+                ("flank_roughness_ra", lubrication.roughness_ra_um),
+                ("lubricant_factor", lubrication.lubricant_factor),
             ],
             format!(
                 "Gear pair {} (z {}/{}), lumped model: rigid gears, {}, backlash",
@@ -73,6 +78,9 @@ pub(crate) fn write_fmu(output: &Path, pair: &GearPair, kind: ModelKind, so: &[u
                 ("mesh_damping_ratio", m.pair.mesh_damping_ratio),
                 ("max_step", m.max_step_s),
                 ("friction_coefficient", m.pair.friction_coefficient),
+                ("oil_viscosity", lubrication.oil_viscosity_mpa_s),
+                ("flank_roughness_ra", lubrication.roughness_ra_um),
+                ("lubricant_factor", lubrication.lubricant_factor),
             ],
             format!(
                 "Gear pair {} (z {}/{}), {}: FE gears reduced to {} + {} coordinates (eigenmodes and global contact shapes in floating frames), {}",

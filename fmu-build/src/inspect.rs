@@ -106,6 +106,7 @@ pub(crate) fn inspect(
             "path_start_m": pair.path_start_m,
             "path_end_m": pair.path_end_m,
             "pitch_point_m": pair.pitch_point_m(),
+            "face_width_m": pair.face_width_m,
             "gear_loss_factor_iso": h_v.as_ref().ok(),
             "gear_loss_factor_uniform_load": gear_loss_factor_uniform_load(&pair),
             "mesh_law": match mesh.law_source {

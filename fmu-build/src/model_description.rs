@@ -40,6 +40,11 @@ fn base_units(unit: &str) -> &'static str {
         "rad" => r#"rad="1""#,
         "rad/s" => r#"rad="1" s="-1""#,
         "kg.m2" => r#"kg="1" m="2""#,
+        "m/s" => r#"m="1" s="-1""#,
+        "W" => r#"kg="1" m="2" s="-3""#,
+        "J" => r#"kg="1" m="2" s="-2""#,
+        "mPa.s" => r#"kg="1" m="-1" s="-1" factor="0.001""#,
+        "um" => r#"m="1" factor="1e-06""#,
         _ => "",
     }
 }
@@ -193,6 +198,9 @@ mod tests {
             ("mesh_damping_ratio", 0.05),
             ("max_step", 1e-5),
             ("friction_coefficient", 0.05),
+            ("oil_viscosity", 0.0),
+            ("flank_roughness_ra", 0.0),
+            ("lubricant_factor", 1.0),
         ];
         let facts = ModelFacts {
             model_name: "Test",

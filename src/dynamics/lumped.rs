@@ -11,6 +11,7 @@
 //! pair entering contact is a steep but continuous change of the law over one table interval; its
 //! work is this torque. Damping c·δ̇ acts only while a flank is in contact; a flank never pulls.
 
+use super::lubricated_friction::{LubricatedFlanks, PitchPointGeometry};
 use super::mesh_friction::{
     friction_reach_per_kg, regularization_for_step_m_per_s, ContactFriction, ContactSpread, SlidingFriction,
     MIN_SLIDING_REGULARIZATION_M_PER_S,
@@ -58,6 +59,9 @@ pub struct LumpedMesh {
     pub coast_spread: ContactSpread,
     /// The tooth friction coefficient of the spec (the FMU parameter's start value).
     pub friction_coefficient: f64,
+    /// ISO/TR 14179-2's law of the spec, if it chose one, and the pitch point it reads.
+    pub lubricated_flanks: Option<LubricatedFlanks>,
+    pub pitch_point: PitchPointGeometry,
     /// T₁T₂ (m), cos β_b, and the operating transverse pressure angle (rad): the friction's arms
     /// and the shaft force's directions.
     pub loa_m: f64,
@@ -129,6 +133,8 @@ impl LumpedMesh {
             drive_spread,
             coast_spread,
             friction_coefficient: pair.friction_coefficient,
+            lubricated_flanks: pair.lubricated_flanks,
+            pitch_point: PitchPointGeometry::of_pair(pair),
             loa_m: pair.loa_length_m(),
             path_start_m: pair.path_start_m,
             path_end_m: pair.path_end_m,
@@ -165,6 +171,17 @@ pub struct LumpedParameters {
     /// initialization (`sliding_regularization_m_per_s`).
     #[serde(default = "min_sliding_regularization")]
     pub sliding_regularization_m_per_s: f64,
+    /// ISO/TR 14179-2's inputs (`lubricated_friction`); an oil viscosity of 0 leaves μ the
+    /// constant `friction_coefficient`.
+    #[serde(default)]
+    pub lubrication: LubricatedFlanks,
+}
+
+impl LumpedParameters {
+    /// ISO/TR 14179-2's law, where the parameters switch it on (an oil viscosity above 0).
+    pub fn lubricated_flanks(&self) -> Option<LubricatedFlanks> {
+        (self.lubrication.oil_viscosity_mpa_s > 0.0).then_some(self.lubrication)
+    }
 }
 
 fn min_sliding_regularization() -> f64 {
@@ -294,6 +311,7 @@ impl LumpedParameters {
             mesh_damping_ratio: mesh.mesh_damping_ratio,
             friction_coefficient: mesh.friction_coefficient,
             sliding_regularization_m_per_s: MIN_SLIDING_REGULARIZATION_M_PER_S,
+            lubrication: mesh.lubricated_flanks.unwrap_or_default(),
         }
     }
 }

@@ -3,6 +3,7 @@
 //! the standard PMOR penalty reference (`pmor`); and the sub-stepping of a communication step
 //! they share. The FMU glue that drives them is `crate::fmu`.
 
+pub mod lubricated_friction;
 pub mod lumped;
 pub mod mesh_friction;
 pub mod mesh_law;

@@ -5,6 +5,7 @@
 
 use super::shared_model::SharedByContent;
 use crate::contact::mesh_kinematics::PairPlacement;
+use crate::dynamics::lubricated_friction::PitchPointGeometry;
 use crate::dynamics::lumped::{LumpedMesh, LumpedModel, LumpedParameters, LumpedState, ShaftForce};
 use crate::dynamics::mesh_friction::SlidingFriction;
 use crate::dynamics::pmor::model::PmorModel;
@@ -49,10 +50,14 @@ pub enum Var {
     MeshEfficiency,
     MeshEnergyLoss,
     FrictionRegularization,
+    OilViscosity,
+    FlankRoughnessRa,
+    LubricantFactor,
+    FrictionCoefficientApplied,
 }
 
 impl Var {
-    pub const ALL: [Var; 28] = [
+    pub const ALL: [Var; 32] = [
         Var::Tau1,
         Var::Tau2,
         Var::Phi1,
@@ -81,6 +86,10 @@ impl Var {
         Var::MeshEfficiency,
         Var::MeshEnergyLoss,
         Var::FrictionRegularization,
+        Var::OilViscosity,
+        Var::FlankRoughnessRa,
+        Var::LubricantFactor,
+        Var::FrictionCoefficientApplied,
     ];
 
     pub fn name(self) -> &'static str {
@@ -113,6 +122,10 @@ impl Var {
             Var::MeshEfficiency => "mesh_efficiency",
             Var::MeshEnergyLoss => "mesh_energy_loss",
             Var::FrictionRegularization => "friction_regularization",
+            Var::OilViscosity => "oil_viscosity",
+            Var::FlankRoughnessRa => "flank_roughness_ra",
+            Var::LubricantFactor => "lubricant_factor",
+            Var::FrictionCoefficientApplied => "friction_coefficient_applied",
         }
     }
 
@@ -129,6 +142,9 @@ impl Var {
                 | Var::MeshDampingRatio
                 | Var::StartAtEquilibrium
                 | Var::FrictionCoefficient
+                | Var::OilViscosity
+                | Var::FlankRoughnessRa
+                | Var::LubricantFactor
         )
     }
 }
@@ -168,6 +184,24 @@ pub struct GearPairState {
     /// alone, so an FMU state carries it as it carries `pmor`.
     #[serde(default)]
     pub pmor_outputs: Option<PmorPortOutputs>,
+    /// The μ the dynamics apply: the `friction_coefficient` parameter, or under ISO/TR 14179-2's
+    /// law its μ_mz, evaluated at initialization and at the start of every doStep.
+    #[serde(default)]
+    pub friction_coefficient_applied: f64,
+    /// ISO/TR 14179-2's law was held below its speed floor, and that was logged (once).
+    #[serde(default)]
+    pub warned_friction_law: bool,
+}
+
+impl GearPairState {
+    /// The parameters the dynamics run with: the instance's, with the μ applied now.
+    pub fn dynamics_params(&self) -> LumpedParameters {
+        let mut p = self.params;
+        if p.lubricated_flanks().is_some() {
+            p.friction_coefficient = self.friction_coefficient_applied;
+        }
+        p
+    }
 }
 
 /// The shaft force and the friction losses of a state, as the FMU answers them.
@@ -473,7 +507,7 @@ impl GearPairFmu {
     /// build's modal damping, and the mesh damper from mesh_damping_ratio, defined as the lumped
     /// model's: c = 2ζ√(k̄·m_e), k̄ the pair's mean mesh stiffness, m_e = 1/(r_b1²/J₁ + r_b2²/J₂).
     pub fn pmor<'a>(&'a self, model: &'a PmorModel, place: &'a PairPlacement, s: &GearPairState) -> PmorDynamics<'a> {
-        let p = &s.params;
+        let p = &s.dynamics_params();
         let added = Self::added_inertia(model, s);
         let damping = model.damping(model.modal_damping_ratio, model.shape_damping_ratio);
         let mut dynamics = match self.splits(model, added) {
@@ -630,7 +664,16 @@ impl GearPairFmu {
         if !(0.0..=max).contains(&value) {
             return Err(format!("friction_coefficient must be in [0, {max}], got {value}"));
         }
-        if let (true, Physics::PmorHertz { model, .. }) = (value != 0.0, &self.physics) {
+        if value != 0.0 {
+            self.carries_friction(&format!("friction_coefficient = {value}"))?;
+        }
+        Ok(value)
+    }
+
+    /// Refuses friction (`what` says which setting asks for it) where the PMOR-Hertz model does
+    /// not carry it: only its default integrator and condensation tally friction's work.
+    fn carries_friction(&self, what: &str) -> Result<(), String> {
+        if let Physics::PmorHertz { model, .. } = &self.physics {
             use crate::dynamics::pmor::{integrator::Integrator, model::FlankContact};
             let condensed = self.default_splits.is_some();
             if model.info.contact != FlankContact::Hertz
@@ -638,7 +681,7 @@ impl GearPairFmu {
                 || !condensed
             {
                 return Err(format!(
-                    "friction_coefficient = {value}: tooth friction is carried by the PMOR-Hertz model with its default \
+                    "{what}: tooth friction is carried by the PMOR-Hertz model with its default \
                      discrete-gradient integrator and quasi-static condensation only (this FMU: {}, {}); the penalty \
                      reference is the paper's frictionless model",
                     model.integrator.name(),
@@ -646,7 +689,78 @@ impl GearPairFmu {
                 ));
             }
         }
-        Ok(value)
+        Ok(())
+    }
+
+    /// The pitch point ISO/TR 14179-2's law reads, and the largest transverse mesh force the
+    /// models answer for (the yield force): where the law's μ is largest at the speed floor.
+    fn pitch_point_and_yield_force(&self) -> (PitchPointGeometry, f64) {
+        match &self.physics {
+            Physics::Lumped(mesh) => (mesh.pitch_point, mesh.yield_mesh_force_n),
+            Physics::PmorHertz { model, .. } => {
+                (PitchPointGeometry::of_pair(&model.pair), crate::closed_forms::rating::yield_mesh_force_n(&model.pair))
+            }
+        }
+    }
+
+    /// ISO/TR 14179-2's law, where an oil viscosity above 0 switches it on: its inputs within
+    /// their ranges (named by their FMU variables), friction_coefficient left at 0, a model that
+    /// carries friction, and μ_mz within [0, 0.3] up to the yield force at the speed floor.
+    /// Returns the largest μ the law gives: what the friction's regularization is sized on.
+    fn friction_law(&self, p: &LumpedParameters) -> Result<f64, String> {
+        let Some(flanks) = p.lubricated_flanks() else {
+            return Ok(p.friction_coefficient);
+        };
+        if let Err((field, rule)) = flanks.check() {
+            let name = match field {
+                "oil_viscosity_mpa_s" => Var::OilViscosity,
+                "roughness_ra_um" => Var::FlankRoughnessRa,
+                _ => Var::LubricantFactor,
+            }
+            .name();
+            return Err(format!("oil_viscosity > 0 switches on ISO/TR 14179-2's friction law: {name} {rule}"));
+        }
+        if p.friction_coefficient != 0.0 {
+            return Err(format!(
+                "friction_coefficient = {} and oil_viscosity = {} mPa·s: set one of them (a constant μ, or ISO/TR \
+                 14179-2's law), and leave the other at 0",
+                p.friction_coefficient, flanks.oil_viscosity_mpa_s
+            ));
+        }
+        self.carries_friction(&format!("oil_viscosity = {} mPa·s", flanks.oil_viscosity_mpa_s))?;
+        let (pitch, yield_force_n) = self.pitch_point_and_yield_force();
+        let largest = flanks.largest_coefficient(&pitch, yield_force_n);
+        let max = crate::gear::MAX_FRICTION_COEFFICIENT;
+        if !(largest <= max) {
+            return Err(format!(
+                "ISO/TR 14179-2's law gives μ = {} with these inputs under the yield force at its speed floor: above \
+                 {max}, dry steel's; check oil_viscosity, flank_roughness_ra and lubricant_factor",
+                sig(largest)
+            ));
+        }
+        Ok(largest)
+    }
+
+    /// μ under ISO/TR 14179-2's law at a state: transverse mesh force `force_n` (N), gear 1 at
+    /// ω₁; logs once where the speed is below the law's floor. Without the law, the parameter.
+    fn applied_friction(&self, s: &mut GearPairState, force_n: f64, omega_1: f64) {
+        let Some(flanks) = s.params.lubricated_flanks() else {
+            s.friction_coefficient_applied = s.params.friction_coefficient;
+            return;
+        };
+        let (pitch, _) = self.pitch_point_and_yield_force();
+        let mu = flanks.mean_coefficient(&pitch, force_n, omega_1);
+        if mu.held_at_low_speed && !s.warned_friction_law && force_n != 0.0 {
+            s.warned_friction_law = true;
+            s.pending_warnings.push(format!(
+                "the sum velocity at the pitch point is {} m/s, below {} m/s where ISO/TR 14179-2's friction law is \
+                 held (it describes running gears; below, boundary lubrication): μ = {} there",
+                sig(pitch.sum_velocity_m_per_s(omega_1)),
+                crate::dynamics::lubricated_friction::MIN_SUM_VELOCITY_M_PER_S,
+                sig(mu.coefficient)
+            ));
+        }
+        s.friction_coefficient_applied = mu.coefficient;
     }
 
     fn mesh_damping_ratio(value: f64) -> Result<f64, String> {
@@ -758,6 +872,7 @@ impl Model for GearPairFmu {
                     mesh_damping_ratio: model.pair.mesh_damping_ratio,
                     friction_coefficient: model.pair.friction_coefficient,
                     sliding_regularization_m_per_s: crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S,
+                    lubrication: model.pair.lubricated_flanks.unwrap_or_default(),
                 },
             ),
         };
@@ -774,6 +889,8 @@ impl Model for GearPairFmu {
             max_step_set: false,
             start_at_equilibrium: false,
             pmor_outputs: None,
+            friction_coefficient_applied: params.friction_coefficient,
+            warned_friction_law: false,
         }
     }
 
@@ -797,6 +914,9 @@ impl Model for GearPairFmu {
             Var::Inertia2 => s.params.inertia_2_kgm2 = self.inertia("inertia_2", 1, value)?,
             Var::MeshDampingRatio => s.params.mesh_damping_ratio = Self::mesh_damping_ratio(value)?,
             Var::FrictionCoefficient => s.params.friction_coefficient = self.friction_coefficient(value)?,
+            Var::OilViscosity => s.params.lubrication.oil_viscosity_mpa_s = lubrication_input(var, value)?,
+            Var::FlankRoughnessRa => s.params.lubrication.roughness_ra_um = lubrication_input(var, value)?,
+            Var::LubricantFactor => s.params.lubrication.lubricant_factor = lubrication_input(var, value)?,
             Var::StartAtEquilibrium => {
                 return Err(format!("value reference {vr} (start_at_equilibrium) is a Boolean, not a Real"))
             }
@@ -819,7 +939,7 @@ impl Model for GearPairFmu {
         let bores_and_ports = |bore: [f64; 2], port: [(f64, f64); 2]| (bore, port.map(|p| p.0), port.map(|p| p.1));
         let ((bore, theta, omega), force, stiffness, losses) = match &self.physics {
             Physics::Lumped(mesh) => {
-                let model = LumpedModel::new(mesh, s.params);
+                let model = LumpedModel::new(mesh, s.dynamics_params());
                 let m = model.mesh_state(&s.mech);
                 let theta = [s.mech.theta_1, s.mech.theta_2];
                 let omega = [s.mech.omega_1, s.mech.omega_2];
@@ -900,6 +1020,10 @@ impl Model for GearPairFmu {
             Var::MeshEfficiency => losses.efficiency,
             Var::MeshEnergyLoss => losses.energy_loss_j,
             Var::FrictionRegularization => s.params.sliding_regularization_m_per_s,
+            Var::FrictionCoefficientApplied => s.dynamics_params().friction_coefficient,
+            Var::OilViscosity => s.params.lubrication.oil_viscosity_mpa_s,
+            Var::FlankRoughnessRa => s.params.lubrication.roughness_ra_um,
+            Var::LubricantFactor => s.params.lubrication.lubricant_factor,
             Var::Phi1Start => s.start.theta_1,
             Var::Phi2Start => s.start.theta_2,
             Var::W1Start => s.start.omega_1,
@@ -918,7 +1042,9 @@ impl Model for GearPairFmu {
     fn get_integer(&self, s: &GearPairState, vr: u32) -> Result<i32, String> {
         match self.var(vr)? {
             Var::ContactPairs => match &self.physics {
-                Physics::Lumped(mesh) => Ok(LumpedModel::new(mesh, s.params).pairs_in_contact(&s.mech) as i32),
+                Physics::Lumped(mesh) => {
+                    Ok(LumpedModel::new(mesh, s.dynamics_params()).pairs_in_contact(&s.mech) as i32)
+                }
                 Physics::PmorHertz { .. } => match (&s.pmor, &s.pmor_outputs) {
                     (Some(_), Some(o)) => Ok(o.contact_pairs as i32),
                     _ => Ok(self.pmor_outputs(s)?.expect("PMOR-Hertz physics").0.contact.pairs_in_contact as i32),
@@ -964,13 +1090,17 @@ impl Model for GearPairFmu {
         }
         self.check_stability(s)?;
         s.mech = s.start;
+        // The largest μ the instance applies (ISO/TR 14179-2's law varies it): what friction's
+        // regularization is sized on.
+        let largest_mu = self.friction_law(&s.params)?;
+        s.friction_coefficient_applied = s.params.friction_coefficient;
         if let Physics::PmorHertz { model, .. } = &self.physics {
             // Friction's regularization: the narrowest band the discrete gradient's fixed point on
             // friction contracts in at this step, under the yield force.
             let p = &s.params;
             s.params.sliding_regularization_m_per_s = crate::dynamics::mesh_friction::regularization_for_pair_m_per_s(
                 &model.pair,
-                p.friction_coefficient,
+                largest_mu,
                 [p.inertia_1_kgm2, p.inertia_2_kgm2],
                 s.max_step_s,
                 1.0,
@@ -978,13 +1108,17 @@ impl Model for GearPairFmu {
         }
         if let Physics::Lumped(mesh) = &self.physics {
             // Friction's regularization: the narrowest band RK4 stays stable in at this step.
+            let sized = LumpedParameters { friction_coefficient: largest_mu, ..s.params };
             s.params.sliding_regularization_m_per_s =
-                crate::dynamics::lumped::sliding_regularization_m_per_s(mesh, &s.params, s.max_step_s);
-            let model = LumpedModel::new(mesh, s.params);
+                crate::dynamics::lumped::sliding_regularization_m_per_s(mesh, &sized, s.max_step_s);
+            // At rest friction is nil, so the equilibrium does not depend on μ.
+            let model = LumpedModel::new(mesh, s.dynamics_params());
             if s.start_at_equilibrium {
                 s.mech = lumped_equilibrium(&model, s.start, s.torques_nm[0])?;
             }
             s.start_energy_j = model.kinetic_energy(&s.mech) + model.mesh_state(&s.mech).potential_j;
+            let force = model.mesh_state(&s.mech).force_n;
+            self.applied_friction(s, force, s.mech.omega_1);
         }
         if let Physics::PmorHertz { model, place } = &self.physics {
             let dynamics = self.pmor(model, place, s);
@@ -998,7 +1132,13 @@ impl Model for GearPairFmu {
                 )?
             };
             // The start must be a state the model can evaluate (e.g. no coast-flank contact).
-            let out = dynamics.outputs(&start)?;
+            let mut out = dynamics.outputs(&start)?;
+            if s.params.lubricated_flanks().is_some() {
+                // The law's μ at the start state, and the start's outputs with it.
+                let transverse = out.contact.normal_force_n * model.pair.base_helix_angle_rad.cos();
+                self.applied_friction(s, transverse, start.omega[0]);
+                out = self.pmor(model, place, s).outputs(&start)?;
+            }
             s.start_energy_j = out.total_energy_j();
             s.pmor = Some(start);
             s.pmor_outputs = Some(PmorPortOutputs::of(&out));
@@ -1021,6 +1161,16 @@ impl Model for GearPairFmu {
         self.inertia("inertia_2", 1, s.params.inertia_2_kgm2)?;
         Self::mesh_damping_ratio(s.params.mesh_damping_ratio)?;
         self.friction_coefficient(s.params.friction_coefficient)?;
+        // ISO/TR 14179-2's inputs are complete once initialization ends (set in any order before).
+        if initialized {
+            let largest_mu = self.friction_law(&s.params)?;
+            if !(0.0..=largest_mu).contains(&s.friction_coefficient_applied) {
+                return Err(format!(
+                    "the applied friction coefficient {} is outside [0, {}], the law's range",
+                    s.friction_coefficient_applied, largest_mu
+                ));
+            }
+        }
         let eps = s.params.sliding_regularization_m_per_s;
         if !(eps.is_finite() && eps >= crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S) {
             return Err(format!("the friction's regularization speed {eps} m/s is not a finite speed ≥ 1 mm/s"));
@@ -1085,6 +1235,11 @@ impl Model for GearPairFmu {
             Physics::Lumped(mesh) => mesh,
             Physics::PmorHertz { model, place } => {
                 let mut state = s.pmor.clone().ok_or("the PMOR-Hertz state is not initialized")?;
+                if let (Some(_), Some(o)) = (s.params.lubricated_flanks(), s.pmor_outputs) {
+                    // ISO/TR 14179-2's μ at the step's start, held over the step.
+                    let transverse = o.mesh_force_n * model.pair.base_helix_angle_rad.cos();
+                    self.applied_friction(s, transverse, state.omega[0]);
+                }
                 let dynamics = self.pmor(model, place, s);
                 let stored_j = s.pmor_outputs.map(|o| o.stored_j);
                 let end = match dynamics.advance_knowing(&mut state, s.torques_nm, h, s.max_step_s, stored_j)? {
@@ -1103,7 +1258,12 @@ impl Model for GearPairFmu {
                 return Ok(());
             }
         };
-        let model = LumpedModel::new(mesh, s.params);
+        if s.params.lubricated_flanks().is_some() {
+            // ISO/TR 14179-2's μ at the step's start, held over the step.
+            let force = LumpedModel::new(mesh, s.dynamics_params()).mesh_state(&s.mech).force_n;
+            self.applied_friction(s, force, s.mech.omega_1);
+        }
+        let model = LumpedModel::new(mesh, s.dynamics_params());
         let mut next = s.mech;
         model.advance(&mut next, s.torques_nm, h, s.max_step_s);
         let m = &next;
@@ -1128,6 +1288,22 @@ impl Model for GearPairFmu {
     fn take_warnings(&self, s: &mut GearPairState) -> Vec<String> {
         std::mem::take(&mut s.pending_warnings)
     }
+}
+
+/// An input of ISO/TR 14179-2's law as an FMU parameter: within its range
+/// (`lubricated_friction::FIELD_RANGES`), or 0 (oil_viscosity: the law off; the others: not set).
+fn lubrication_input(var: Var, value: f64) -> Result<f64, String> {
+    let field = match var {
+        Var::OilViscosity => "oil_viscosity_mpa_s",
+        Var::FlankRoughnessRa => "roughness_ra_um",
+        _ => "lubricant_factor",
+    };
+    if value == 0.0 {
+        return Ok(0.0);
+    }
+    crate::dynamics::lubricated_friction::field_rule(field, value)
+        .map(|()| value)
+        .map_err(|rule| format!("{} {rule} (or 0: oil_viscosity = 0 is the constant friction_coefficient)", var.name()))
 }
 
 /// How much energy a step may create, E + D − W − E₀ > 0, as a share of the energy in play

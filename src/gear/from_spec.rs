@@ -10,6 +10,7 @@ use super::{
     DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE, MAX_FRICTION_COEFFICIENT, MAX_TEETH, MODULE_RANGE_MM, YIELD_RANGE_MPA,
 };
 use crate::closed_forms::rating;
+use crate::dynamics::lubricated_friction::LubricatedFlanks;
 use std::f64::consts::PI;
 
 impl GearPair {
@@ -46,6 +47,44 @@ fn within(field: &str, value: f64, (lo, hi): (f64, f64), unit_and_why: &str) -> 
         Ok(())
     } else {
         Err(invalid(field, format!("must be in [{lo}, {hi}] {unit_and_why}, got {}", sig(value))))
+    }
+}
+
+/// ISO/TR 14179-2's law, where `[friction] law` chooses it: its inputs are then required (X_L
+/// defaults to mineral oil's 1.0) and `coefficient` must be left out; under the constant law
+/// they must be left out.
+fn lubricated_flanks(f: &spec::FrictionSpec) -> Result<Option<LubricatedFlanks>, SpecError> {
+    let inputs = [
+        ("friction.oil_viscosity_mpa_s", f.oil_viscosity_mpa_s),
+        ("friction.roughness_ra_um", f.roughness_ra_um),
+        ("friction.lubricant_factor", f.lubricant_factor),
+    ];
+    match f.law {
+        spec::FrictionLawSpec::Constant => match inputs.iter().find(|(_, v)| v.is_some()) {
+            Some((field, _)) => Err(invalid(
+                field,
+                "is an input of ISO/TR 14179-2's law: set `law = \"iso-tr-14179-2\"` too, or leave it out",
+            )),
+            None => Ok(None),
+        },
+        spec::FrictionLawSpec::IsoTr14179_2 => {
+            if f.coefficient != 0.0 {
+                return Err(invalid(
+                    "friction.coefficient",
+                    "must be left out under `law = \"iso-tr-14179-2\"`: the law gives μ from the load and the speed",
+                ));
+            }
+            let required = |(field, value): (&str, Option<f64>)| {
+                value.ok_or_else(|| invalid(field, "is required by `law = \"iso-tr-14179-2\"`"))
+            };
+            let flanks = LubricatedFlanks {
+                oil_viscosity_mpa_s: required(inputs[0])?,
+                roughness_ra_um: required(inputs[1])?,
+                lubricant_factor: f.lubricant_factor.unwrap_or(1.0),
+            };
+            flanks.check().map_err(|(field, rule)| invalid(&format!("friction.{field}"), rule))?;
+            Ok(Some(flanks))
+        }
     }
 }
 
@@ -119,6 +158,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
             ),
         ));
     }
+    let lubricated_flanks = lubricated_flanks(&spec.friction)?;
 
     let alpha_n = alpha_n_deg.to_radians();
     let beta = rack.helix_angle_deg.to_radians();
@@ -377,6 +417,7 @@ fn build_pair(spec: &PairSpec) -> Result<GearPair, SpecError> {
         },
         mesh_damping_ratio: zeta,
         friction_coefficient: mu,
+        lubricated_flanks,
         operating_torque_nm: 0.0,
         rack_dedendum_coefficient: hf,
         hertz_contact: spec.lumped.hertz_contact,

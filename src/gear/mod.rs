@@ -145,6 +145,10 @@ pub struct GearPair {
     /// The tooth friction coefficient μ (`[friction]`, issue 42; 0: frictionless).
     #[serde(default)]
     pub friction_coefficient: f64,
+    /// ISO/TR 14179-2's law for μ (`[friction] law = "iso-tr-14179-2"`): where given, the
+    /// models take μ_mz from the load and speed instead of `friction_coefficient` (then 0).
+    #[serde(default)]
+    pub lubricated_flanks: Option<crate::dynamics::lubricated_friction::LubricatedFlanks>,
     /// The design torque on gear 1 (N·m): the spec's `operating.torque_nm`, or the pair's rated
     /// torque (`rating::rated_torque_nm`). What the offline builds size their models on.
     pub operating_torque_nm: f64,

@@ -141,6 +141,29 @@ pub struct FrictionSpec {
     /// same at every contact (a constant law). Default 0: a frictionless mesh, as the paper's.
     #[serde(default)]
     pub coefficient: f64,
+    /// The law μ follows: `constant` (default: `coefficient`) or `iso-tr-14179-2` (μ_mz from
+    /// the load, the speed, the oil and the roughness: `dynamics::lubricated_friction`).
+    #[serde(default)]
+    pub law: FrictionLawSpec,
+    /// ISO/TR 14179-2's inputs: the oil's dynamic viscosity at its running temperature (mPa·s),
+    /// the flanks' mean roughness Ra = (Ra₁ + Ra₂)/2 (µm), and the lubricant factor X_L
+    /// (default 1.0, mineral oil).
+    #[serde(default)]
+    pub oil_viscosity_mpa_s: Option<f64>,
+    #[serde(default)]
+    pub roughness_ra_um: Option<f64>,
+    #[serde(default)]
+    pub lubricant_factor: Option<f64>,
+}
+
+/// The friction law a spec chooses (`[friction] law`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrictionLawSpec {
+    #[default]
+    Constant,
+    #[serde(rename = "iso-tr-14179-2")]
+    IsoTr14179_2,
 }
 
 /// The operating point the pair is designed for: what the offline build sizes its model on.

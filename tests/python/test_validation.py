@@ -43,6 +43,8 @@ def test_model_description_matches_contract(fmi_case):
         "force_axial": ("output", "Real"), "mesh_power_loss": ("output", "Real"),
         "mesh_efficiency": ("output", "Real"), "mesh_energy_loss": ("output", "Real"),
         "friction_regularization": ("output", "Real"),
+        "oil_viscosity": ("parameter", "Real"), "flank_roughness_ra": ("parameter", "Real"),
+        "lubricant_factor": ("parameter", "Real"), "friction_coefficient_applied": ("output", "Real"),
     }
     for name, (causality, type_) in expected.items():
         assert name in variables, f"missing variable {name}"
