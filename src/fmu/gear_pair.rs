@@ -1291,7 +1291,7 @@ impl Model for GearPairFmu {
 }
 
 /// An input of ISO/TR 14179-2's law as an FMU parameter: within its range
-/// (`lubricated_friction::FIELD_RANGES`), or 0 (oil_viscosity: the law off; the others: not set).
+/// (`gear::lubrication::FIELD_RANGES`), or 0 (oil_viscosity: the law off; the others: not set).
 fn lubrication_input(var: Var, value: f64) -> Result<f64, String> {
     let field = match var {
         Var::OilViscosity => "oil_viscosity_mpa_s",
@@ -1301,7 +1301,7 @@ fn lubrication_input(var: Var, value: f64) -> Result<f64, String> {
     if value == 0.0 {
         return Ok(0.0);
     }
-    crate::dynamics::lubricated_friction::field_rule(field, value)
+    crate::gear::lubrication::field_rule(field, value)
         .map(|()| value)
         .map_err(|rule| format!("{} {rule} (or 0: oil_viscosity = 0 is the constant friction_coefficient)", var.name()))
 }

@@ -3,6 +3,7 @@
 //! rating where the spec gives none).
 
 use super::involute::{inv, inv_inverse};
+use super::lubrication::LubricatedFlanks;
 use super::spec::PairSpec;
 use super::spec_error::{invalid, SpecError};
 use super::{fillet, modification, sig, spec, Gear, GearPair};
@@ -10,7 +11,6 @@ use super::{
     DEFAULT_TIP_EDGE_RADIUS_OVER_MODULE, MAX_FRICTION_COEFFICIENT, MAX_TEETH, MODULE_RANGE_MM, YIELD_RANGE_MPA,
 };
 use crate::closed_forms::rating;
-use crate::dynamics::lubricated_friction::LubricatedFlanks;
 use std::f64::consts::PI;
 
 impl GearPair {

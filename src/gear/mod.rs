@@ -7,6 +7,7 @@
 pub mod fillet;
 mod from_spec;
 pub mod involute;
+pub mod lubrication;
 pub mod mesh_spec;
 pub mod modification;
 pub mod spec;
@@ -148,7 +149,7 @@ pub struct GearPair {
     /// ISO/TR 14179-2's law for μ (`[friction] law = "iso-tr-14179-2"`): where given, the
     /// models take μ_mz from the load and speed instead of `friction_coefficient` (then 0).
     #[serde(default)]
-    pub lubricated_flanks: Option<crate::dynamics::lubricated_friction::LubricatedFlanks>,
+    pub lubricated_flanks: Option<lubrication::LubricatedFlanks>,
     /// The design torque on gear 1 (N·m): the spec's `operating.torque_nm`, or the pair's rated
     /// torque (`rating::rated_torque_nm`). What the offline builds size their models on.
     pub operating_torque_nm: f64,
