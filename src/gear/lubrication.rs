@@ -34,7 +34,10 @@ pub fn field_rule(field: &str, value: f64) -> Result<(), String> {
     if value.is_finite() && (*low..=*high).contains(&value) {
         Ok(())
     } else {
-        Err(format!("must be in [{low}, {high}] for ISO/TR 14179-2's friction law, got {}", super::sig(value)))
+        Err(format!(
+            "must be in [{low}, {high}] for ISO/TR 14179-2's friction law, got {}",
+            super::spec_error::sig(value)
+        ))
     }
 }
 

@@ -12,6 +12,7 @@ pub mod mesh_spec;
 pub mod modification;
 pub mod spec;
 pub mod spec_error;
+pub use spec_error::sig;
 
 use involute::inv;
 use serde::{Deserialize, Serialize};
@@ -188,24 +189,5 @@ impl GearPair {
     pub fn contact_radii(&self, u_m: f64) -> (f64, f64) {
         let (rho1, rho2) = self.radii_of_curvature(u_m);
         (self.gear1.base_radius_m.hypot(rho1), self.gear2.base_radius_m.hypot(rho2))
-    }
-}
-
-/// A number with six significant digits, in exponent form when it is very large or small: what
-/// a message prints of a value a user typed (1e200 is not worth 200 digits).
-pub fn sig(value: f64) -> String {
-    let a = value.abs();
-    if value == 0.0 || !value.is_finite() {
-        return format!("{value}");
-    }
-    if !(1e-4..1e7).contains(&a) {
-        return format!("{value:.5e}");
-    }
-    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
-    let text = format!("{value:.decimals$}");
-    if text.contains('.') {
-        text.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        text
     }
 }
