@@ -34,6 +34,8 @@ pub type FmuModel = fmu::any_model::AnyModel;
 /// makes a few dozen small vectors per contact evaluation, and glibc's malloc and free took
 /// 14 % of a spur pair's doStep samples; with mimalloc the doStep is about a fifth shorter
 /// (BENCHMARKS §13). Only Rust's own allocations go through it: the FMU hands no memory to the
-/// master to free, and takes none from it (`canNotUseMemoryManagementFunctions`).
+/// master to free, and takes none from it (`canNotUseMemoryManagementFunctions`). Its
+/// local-dynamic TLS model (Cargo.toml) lets a process load many FMU binaries: with the default
+/// initial-exec model the loader runs out of static TLS after a few dozen.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
