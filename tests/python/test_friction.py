@@ -303,13 +303,14 @@ def iso_tr_14179_2_mu(mesh: dict, transverse_force_n: float, w1: float) -> float
 
 
 @pytest.mark.parametrize("kind", ["lumped", "pmor-hertz"])
-def test_iso_tr_14179_2_law_gives_its_mu_and_the_loss_follows(friction_fmus, gear_fmus, make_slave, kind):
+def test_iso_tr_14179_2_law_gives_its_mu_and_the_loss_follows(friction_fmus, gear_fmus, make_slave, log_capture,
+                                                               kind):
     """Evidence: ISO/TR 14179-2's μ_mz (its formula, written in this test) and H_V. The Kurokawa
     spur pair brake-held under its operating torque at 200 Hz mesh frequency with the law switched
     on by the FMU parameters: the μ it applies (`friction_coefficient_applied`) is μ_mz at the
     mesh force and speed a step starts from (to 1e-9), and the mesh loss is μ_mz·H_V within 10 %
     at the mean load T₁/r_b1, as with a constant μ. At rest (v_ΣC = 0) the law is held at v_ΣC =
-    1 m/s."""
+    1 m/s, and the FMU says so: one warning, however many steps stay below."""
     mesh = friction_fmus["kurokawa_spur"].mesh
     case = friction_fmus["kurokawa_spur"] if kind == "lumped" else gear_fmus["spur-pmor"]
     torque = mesh["operating_torque_nm"]
@@ -337,11 +338,18 @@ def test_iso_tr_14179_2_law_gives_its_mu_and_the_loss_follows(friction_fmus, gea
           f"{loss / (mu_iso * h_v):.4f})")
     assert loss == pytest.approx(mu_iso * h_v, rel=0.10)
     # At rest under load: held at the speed floor.
-    rest = make_slave(case, f"iso-law-rest-{kind}", parameters=ISO_LAW, booleans={"start_at_equilibrium": True},
-                      inputs=(torque, -torque * z2 / z1))
+    name = f"iso-law-rest-{kind}"
+    rest = make_slave(case, name, parameters=ISO_LAW, booleans={"start_at_equilibrium": True},
+                      inputs=(torque, -torque * z2 / z1), callbacks=log_capture.callbacks, logging_on=True)
     held = rest.fmu.getReal([rest.vr["friction_coefficient_applied"]])[0]
     floor = iso_tr_14179_2_mu(mesh, load, 0.0)
     assert held == pytest.approx(floor, rel=1e-3)
+    t = 0.0
+    for _ in range(3):
+        rest.step(t, 1e-4)
+        t += 1e-4
+    held_logs = [m for status, _, m in log_capture.for_instance(name) if "ISO/TR 14179-2's friction law is held" in m]
+    assert len(held_logs) == 1, held_logs
 
 
 def test_iso_tr_14179_2_law_inputs_are_checked(gear_fmus, make_slave):
