@@ -49,7 +49,7 @@ def brake_held_run(slave, mesh: dict, torque: float, mesh_hz: float, cycles: int
     """τ₁ held, gear 2 braked to hold its speed: τ₂ = −T₁·z₂/z₁ − k·(ω₂ − ω₂*) − k_i·∫(ω₂ − ω₂*),
     critically damped at 50 rad/s on the pair's inertia. The integral takes up the friction
     loss: with the proportional part alone the speed settled T₁·(z₂/z₁)·loss/k below its target
-    (half of it on the small pairs). After 40 mesh cycles, `cycles` whole ones are measured.
+    (a third of it on the small pairs). After 40 mesh cycles, `cycles` whole ones are measured.
     Returns the loss over the window's input work, and the window's mean shaft forces, each
     output sampled per step."""
     z1, z2 = mesh["teeth_1"], mesh["teeth_2"]
