@@ -369,6 +369,8 @@ pub struct LoadedPair {
     /// mesh damping ratio, as bits), linearized once per set (`check_stability`).
     stability_limits: std::sync::Mutex<Vec<([u64; 3], f64)>>,
     pub validity: Validity,
+    /// The pitch point ISO/TR 14179-2's friction law reads (`lubricated_friction`).
+    pitch_point: PitchPointGeometry,
     /// PMOR-Hertz, condensed: each gear's split into slow and quasi-static coordinates at the FE
     /// inertias (an eigen-decomposition per gear), made once rather than per call.
     default_splits: Option<Arc<[GearSplit; 2]>>,
@@ -464,8 +466,13 @@ impl LoadedPair {
             }
             _ => None,
         };
+        let pitch_point = match &physics {
+            Physics::Lumped(mesh) => mesh.pitch_point,
+            Physics::PmorHertz { model, .. } => PitchPointGeometry::of_pair(&model.pair),
+        };
         Ok(LoadedPair {
             guid: file.guid,
+            pitch_point,
             physics,
             stiffest_mesh_n_per_m,
             lookup,
@@ -692,17 +699,6 @@ impl GearPairFmu {
         Ok(())
     }
 
-    /// The pitch point ISO/TR 14179-2's law reads, and the largest transverse mesh force the
-    /// models answer for (the yield force): where the law's μ is largest at the speed floor.
-    fn pitch_point_and_yield_force(&self) -> (PitchPointGeometry, f64) {
-        match &self.physics {
-            Physics::Lumped(mesh) => (mesh.pitch_point, mesh.yield_mesh_force_n),
-            Physics::PmorHertz { model, .. } => {
-                (PitchPointGeometry::of_pair(&model.pair), crate::closed_forms::rating::yield_mesh_force_n(&model.pair))
-            }
-        }
-    }
-
     /// ISO/TR 14179-2's law, where an oil viscosity above 0 switches it on: its inputs within
     /// their ranges (named by their FMU variables), friction_coefficient left at 0, a model that
     /// carries friction, and μ_mz within [0, 0.3] up to the yield force at the speed floor.
@@ -712,12 +708,7 @@ impl GearPairFmu {
             return Ok(p.friction_coefficient);
         };
         if let Err((field, rule)) = flanks.check() {
-            let name = match field {
-                "oil_viscosity_mpa_s" => Var::OilViscosity,
-                "roughness_ra_um" => Var::FlankRoughnessRa,
-                _ => Var::LubricantFactor,
-            }
-            .name();
+            let name = LAW_INPUTS.iter().find(|(_, f)| *f == field).map_or(field, |(v, _)| v.name());
             return Err(format!("oil_viscosity > 0 switches on ISO/TR 14179-2's friction law: {name} {rule}"));
         }
         if p.friction_coefficient != 0.0 {
@@ -728,8 +719,8 @@ impl GearPairFmu {
             ));
         }
         self.carries_friction(&format!("oil_viscosity = {} mPa·s", flanks.oil_viscosity_mpa_s))?;
-        let (pitch, yield_force_n) = self.pitch_point_and_yield_force();
-        let largest = flanks.largest_coefficient(&pitch, yield_force_n);
+        // The largest transverse force the models answer for: the yield force.
+        let largest = flanks.largest_coefficient(&self.pitch_point, self.validity.yield_mesh_force_n);
         let max = crate::gear::MAX_FRICTION_COEFFICIENT;
         if !(largest <= max) {
             return Err(format!(
@@ -748,8 +739,8 @@ impl GearPairFmu {
             s.friction_coefficient_applied = s.params.friction_coefficient;
             return;
         };
-        let (pitch, _) = self.pitch_point_and_yield_force();
-        let mu = flanks.mean_coefficient(&pitch, force_n, omega_1);
+        let pitch = &self.pitch_point;
+        let mu = flanks.mean_coefficient(pitch, force_n, omega_1);
         if mu.held_at_low_speed && !s.warned_friction_law && force_n != 0.0 {
             s.warned_friction_law = true;
             s.pending_warnings.push(format!(
@@ -1290,14 +1281,17 @@ impl Model for GearPairFmu {
     }
 }
 
+/// ISO/TR 14179-2's inputs: each FMU parameter and its field in `gear::lubrication`.
+const LAW_INPUTS: [(Var, &str); 3] = [
+    (Var::OilViscosity, "oil_viscosity_mpa_s"),
+    (Var::FlankRoughnessRa, "roughness_ra_um"),
+    (Var::LubricantFactor, "lubricant_factor"),
+];
+
 /// An input of ISO/TR 14179-2's law as an FMU parameter: within its range
 /// (`gear::lubrication::FIELD_RANGES`), or 0 (oil_viscosity: the law off; the others: not set).
 fn lubrication_input(var: Var, value: f64) -> Result<f64, String> {
-    let field = match var {
-        Var::OilViscosity => "oil_viscosity_mpa_s",
-        Var::FlankRoughnessRa => "roughness_ra_um",
-        _ => "lubricant_factor",
-    };
+    let field = LAW_INPUTS.iter().find(|(v, _)| *v == var).map_or("", |(_, f)| f);
     if value == 0.0 {
         return Ok(0.0);
     }
