@@ -1440,6 +1440,98 @@ fn the_discrete_gradient_books_tooth_friction_in_the_energy_balance() {
     assert!(worst <= 1e-3 * vib, "the balance closes to the iteration's tolerance");
 }
 
+/// Tooth friction's direction on the flanks (issue 42), against closed forms. (1) Each flank
+/// node's transverse tangent (`FlankGrid::transverse_tangent`) is a unit vector in the flank's
+/// tangent plane, and a turn of the gear moves the node along it by the involute's radius of
+/// curvature √(r² − r_b²) per radian. (2) Friction's rows on the elastic coordinates see a turn of
+/// the rim as the floating frame's turn: the fixed-interface modes' share of the rigid rotation
+/// field, Φ·c with c = M_ΦΦ⁻¹·b (b = (Gx)ᵀMΦ, the field's mass-weighted projection), moves each
+/// loaded section's flank points as a turn of the gear does. So c's approach (the normal rows) is
+/// the approach slope ∂α/∂θ times the share of the turn the modes carry there, and c's sliding
+/// (the tangent rows, with their orientation and sign) is the rigid arm (u on gear 1,
+/// −(T₁T₂ − u) on gear 2, `mesh_friction`'s closed form) times the same share — to within what
+/// the modes' fit of the turn leaves: the share along the normal varies by 5 % between sections,
+/// so the sliding is asked within 3 % of the base radius (the approach slope's size). A tangent
+/// oriented the wrong way would miss by twice the arm over r_b, 0.2 or more on these pairs.
+/// Contacts below the stored flank's lowest row (the helical pair's path starts 2 mm below it
+/// on gear 1) take that row's band, whose arm is longer than the contact's: reported, not asked.
+#[test]
+fn friction_acts_along_the_flank_tangent_and_sees_a_turn_of_the_rim_as_the_rigid_arms() {
+    use gearfmu::contact::mesh_kinematics::Flank;
+    use gearfmu::dynamics::mesh_friction::SlidingFriction;
+    for (name, f) in [("spur", fixture()), ("helical", helical_fixture())] {
+        let m = &f.model;
+        let rb = base_radii(m);
+        // (1) The tangent at every node of both flanks of both gears.
+        let mut arm_error = 0.0_f64;
+        let mut arm_range = [[f64::INFINITY, 0.0_f64]; 2];
+        for i in 0..2 {
+            for flank in [Flank::Drive, Flank::Coast] {
+                let grid = &m.gears[i].flank(flank).grid;
+                for k in 0..grid.len() {
+                    let t = grid.transverse_tangent(k);
+                    let n = grid.nodes[k].1;
+                    let [x, y] = grid.node_xy[k];
+                    assert!((t[0].hypot(t[1]) - 1.0).abs() < 1e-12 && t[2] == 0.0);
+                    assert!((t[0] * n[0] + t[1] * n[1]).abs() < 1e-12, "in the tangent plane");
+                    // A turn moves the node by e_z × x per radian.
+                    let arm = -y * t[0] + x * t[1];
+                    let involute = (x * x + y * y - rb[i] * rb[i]).sqrt();
+                    arm_error = arm_error.max((arm.abs() - involute).abs() / involute);
+                    arm_range[i] = [arm_range[i][0].min(arm.abs()), arm_range[i][1].max(arm.abs())];
+                }
+            }
+        }
+        assert!(arm_error < 1e-6, "{name}: a node's arm along the tangent is the involute's ρ ({arm_error:e})");
+        // (2) The rows of loaded sections at eight positions over a pitch.
+        let mut d = PmorDynamics::new(m, &f.place, m.damping(m.modal_damping_ratio, m.shape_damping_ratio), [0.0; 2]);
+        d.set_condensation(Condensation::QuasiStatic);
+        d.friction = Some(SlidingFriction { coefficient: 0.05, regularization_m_per_s: 1e-3 });
+        let torque = m.info.rom_torques_nm[0];
+        let loa = m.pair.loa_length_m();
+        let (mut checked, mut worst, mut worst_below) = (0, 0.0_f64, 0.0_f64);
+        let mut share_range = [f64::INFINITY, 0.0_f64];
+        for k in 0..8 {
+            let theta2 = (k as f64 + 0.5) / 8.0 * 2.0 * PI / m.pair.gear2.teeth as f64;
+            // Gear 1 advanced by 20 µm along the line of action: the flanks pressed.
+            let s = d
+                .start_state([(20e-6 + theta2 * rb[1]) / rb[0], theta2], [0.0; 2], [torque, -torque * rb[1] / rb[0]])
+                .unwrap();
+            // The condensed right-hand side solves the fast coordinates and keeps the rows.
+            let (_, out) = d.rhs(&d.pack(&s), s.anchor, s.torques_nm).unwrap();
+            for section in &out.contact.sections {
+                for i in 0..2 {
+                    let g = &m.gears[i];
+                    let n_k = g.modes();
+                    let c = g.phi_phi.clone().cholesky().unwrap().solve(&g.gx_phi);
+                    let on_c = |row: &[f64]| row[1..1 + n_k].iter().zip(c.iter()).map(|(r, c)| r * c).sum::<f64>();
+                    let normal_share = on_c(&section.rows[i]) / section.rows[i][0];
+                    let arm = if i == 0 { section.point_m } else { -(loa - section.point_m) };
+                    // The sliding the turn makes against the rigid arm's at the normal's share,
+                    // over the approach slope (≈ r_b): near a gear's root the arm is short.
+                    let miss = ((on_c(&section.sliding_rows[i]) - normal_share * arm) / section.rows[i][0]).abs();
+                    if arm.abs() < arm_range[i][0] {
+                        worst_below = worst_below.max(miss);
+                        continue;
+                    }
+                    worst = worst.max(miss);
+                    share_range = [share_range[0].min(normal_share), share_range[1].max(normal_share)];
+                    checked += 1;
+                }
+            }
+        }
+        eprintln!(
+            "{name}: node arms within {arm_error:.1e} of the involute's; {checked} section rows, the modes carry \
+             {:.4} … {:.4} of a turn along the normal, the sliding within {worst:.4} r_b of the rigid arm's at \
+             that share ({worst_below:.4} below the flank's lowest row)",
+            share_range[0], share_range[1]
+        );
+        assert!(checked >= 16);
+        assert!(share_range[0] > 0.8, "the fixed-interface modes carry the rim's turn at the flanks");
+        assert!(worst < 0.03, "the tangent rows see the turn as the rigid arms do");
+    }
+}
+
 /// Issue 38, at the mesh resonance: the Kurokawa spur pair at a 2.9 kHz mesh frequency (gear 2 at
 /// 588 rad/s), a constant T₁ = 185 N·m against a viscous brake fed back from w₂ once per 20 µs
 /// call, as a master runs it, over 30 mesh cycles with contact loss. Before the speed bound the

@@ -145,6 +145,23 @@ impl FlankGrid {
         Some(out)
     }
 
+    /// The unit tangent of node k's flank in the transverse plane, e_z × n_k over its length,
+    /// oriented along the flank the way a rotation that pushes the node out along its normal
+    /// (into contact) carries it. Tooth friction acts along it (issue 42): flanks slide in
+    /// transverse planes, so a helical flank's friction has no axial part, and e_z × n lies in
+    /// the flank's tangent plane. The rotation's velocity there is ±e_z × x, so the pushing
+    /// sense is the sign of (e_z × x)·n, and its tangential part (e_z × x)·(e_z × n) = x·n
+    /// (transverse parts) is the radius of curvature ρ of an involute: the node's arm along the
+    /// tangent.
+    pub fn transverse_tangent(&self, k: usize) -> [f64; 3] {
+        let ([x, y], n) = (self.node_xy[k], self.nodes[k].1);
+        let transverse = (n[0] * n[0] + n[1] * n[1]).sqrt();
+        let t = [-n[1] / transverse, n[0] / transverse, 0.0];
+        let pushing = (x * n[1] - y * n[0]).signum(); // (e_z × x)·n
+        let along = (-y * t[0] + x * t[1]).signum(); // (e_z × x)·t
+        t.map(|c| pushing * along * c)
+    }
+
     /// Unit normal at a point, interpolated from the shares.
     pub fn normal(&self, shares: &Shares) -> [f64; 3] {
         let mut n = [0.0; 3];

@@ -26,9 +26,9 @@
 //! angles.
 
 use super::equations::Stencil;
-use super::model::PmorModel;
+use super::model::{NodeDirection, PmorModel};
 use crate::contact::mesh_kinematics::{line_of_action_point_m, ContactKind, Flank, PairPlacement, SectionContact};
-use crate::dynamics::mesh_friction::{ContactFriction, SlidingFriction};
+use crate::dynamics::mesh_friction::SlidingFriction;
 
 /// Angle step of the central differences ∂α/∂θ at tip corners (rad).
 const ANGLE_STEP: f64 = 1e-7;
@@ -87,6 +87,45 @@ pub struct SectionRows {
     /// Per gear over (θ, η_Φ, η_Ψ): ∂α/∂θ, then the band's rows of the basis along the flank
     /// normal (the generalized force on η is −force·row).
     pub rows: [Vec<f64>; 2],
+    /// Where tooth friction is on (empty otherwise), per gear over (θ, η_Φ, η_Ψ): the rows of
+    /// the deformed flanks' sliding v = s₁·q̇₁ + s₂·q̇₂ (m/s, positive where gear 1's flank runs
+    /// ahead of gear 2's), `sliding_rows`. Friction f acts on gear i's coordinates as −f·sᵢ.
+    pub sliding_rows: [Vec<f64>; 2],
+}
+
+/// The rows of a section's sliding (`SectionRows::sliding_rows`), per gear: on η the band's rows
+/// along the flank's transverse tangent t, with the flank's sign; on θ the rigid arm of
+/// `mesh_friction` (u on gear 1, −(T₁T₂ − u) on gear 2: the sliding ω₁u − ω₂(T₁T₂ − u)) and the
+/// same band's tᵀ∂u/∂ϑ, the shapes' turning with the gear (the material's rate is V·η̇ + θ̇·V_ϑ·η:
+/// as the load rolls on, the deformation moves through both). Why the flank's sign: a turn of
+/// gear i in its mesh sense moves its flank point along τᵢ at speed ρᵢ, and the tangent
+/// (`FlankGrid::transverse_tangent`) is oriented with the turn that pushes the flank into
+/// contact. On the drive flanks gear 1's mesh sense pushes (∂α/∂θ₁ > 0) and gear 2's retreats
+/// (∂α/∂θ₂ < 0), so τ₁ = t₁ and τ₂ = −t₂; gear 1's material runs along τ₁ by t₁ᵀu̇₁, gear 2's
+/// by −t₂ᵀu̇₂, and the sliding, their difference, takes +t₁ᵀu̇₁ + t₂ᵀu̇₂. The coast flanks turn
+/// both signs. The two τ are one direction in the world: at the pitch point the flanks roll.
+#[allow(clippy::too_many_arguments)]
+fn add_sliding_rows(
+    g: &super::model::PmorGear,
+    i: usize,
+    flank: Flank,
+    pose: &GearPose,
+    loa_m: f64,
+    point_m: f64,
+    band: &[(usize, f64)],
+    nodes: &mut NodeDisplacements,
+    rows: &mut [f64],
+) {
+    let grid = &g.flank(flank).grid;
+    let sign = flank.sign();
+    let mut turning = 0.0;
+    for &(k, w) in band {
+        g.add_directed_basis_row(flank, &pose.stencil, k, NodeDirection::Tangent, sign * w, &mut rows[1..]);
+        let (_, du) = nodes.get(g, flank, pose, k);
+        let t = grid.transverse_tangent(k);
+        turning += sign * w * (t[0] * du[0] + t[1] * du[1]);
+    }
+    rows[0] = if i == 0 { point_m } else { -(loa_m - point_m) } + turning;
 }
 
 /// Gear i's elastic approach at a contact point: nᵀũ, with n the flank normal and ũ the
@@ -399,6 +438,7 @@ pub fn section_contact_loads(
                     force_n: force,
                     stiffness_n_per_m: 1.0 / law.compliance(force),
                     rows: [0, 1].map(|i| vec![0.0; 1 + n_e[i]]),
+                    sliding_rows: [0, 1].map(|i| if friction.is_some() { vec![0.0; 1 + n_e[i]] } else { Vec::new() }),
                 });
                 for i in 0..2 {
                     let g = &model.gears[i];
@@ -417,7 +457,7 @@ pub fn section_contact_loads(
                     for &(k, w) in &band {
                         match normal {
                             Some(n) => g.add_basis_row(flank, &poses[i].stencil, k, n.map(|c| w * c), row),
-                            None => g.add_normal_basis_row(flank, &poses[i].stencil, k, w, row),
+                            None => g.add_directed_basis_row(flank, &poses[i].stencil, k, NodeDirection::Normal, w, row),
                         }
                     }
                     for (f, r) in out.force[i][1..].iter_mut().zip(row.iter()) {
@@ -425,6 +465,11 @@ pub fn section_contact_loads(
                     }
                     if let Some(section) = section.as_mut() {
                         section.rows[i][1..].copy_from_slice(row);
+                        if friction.is_some() {
+                            let (point, sliding) = (section.point_m, &mut section.sliding_rows[i]);
+                            let loa = p.loa_length_m();
+                            add_sliding_rows(g, i, flank, poses[i], loa, point, &band, &mut nodes[i], sliding);
+                        }
                     }
                 }
                 // Generalized forces on the angles: −∂W/∂θᵢ at fixed η, W(α(θ), R(θ)): the force
@@ -473,7 +518,7 @@ pub fn section_contact_loads(
         apply_mesh_damper(model, poses, &sections_loaded, damper_n_s_per_m, &mut out);
     }
     if let Some(law) = friction {
-        apply_tooth_friction(model, poses, &sections_loaded, law, &mut out);
+        apply_tooth_friction(poses, &sections_loaded, law, &mut out);
     }
     out.normal_force_n += out.damper_force_n;
     if collect_rows {
@@ -511,29 +556,32 @@ pub(super) fn apply_mesh_damper(
 }
 
 /// Tooth friction on the loaded sections (`dynamics::mesh_friction`): on each, f = μF_s·v/√(v² + v_ε²)
-/// at the sliding v = θ̇₁u − θ̇₂(T₁T₂ − u) of the floating frames' rotation, with the torques
-/// −f·u on θ₁ and +f·(T₁T₂ − u) on θ₂ (the same on either flank: the mirrored pair's). It acts on
-/// the angles only: the friction's load on the elastic coordinates (the teeth bent along the
-/// flank) and the bodies' rates in the sliding are left out; F_s is the section's elastic force.
-/// Its torques are booked with the damping forces (the sign of Dq̇), so the integrator counts its
-/// work as dissipation.
+/// at the deformed flanks' sliding v = s₁·q̇₁ + s₂·q̇₂ (`SectionRows::sliding_rows`: the floating
+/// frames' rotation, ω₁u − ω₂(T₁T₂ − u), and the flank nodes' elastic rates along the flank), F_s
+/// the section's elastic force, acting on gear i's coordinates as −f·sᵢ: on the angles the
+/// torques −f·u and +f·(T₁T₂ − u), on η the teeth bent along the flank. The rates are what the
+/// pose carries (every coordinate's on the full pair, the slow motion's on the condensed one,
+/// whose fast rates `quasi_static::damp_the_fast_motion` adds). Its forces are booked with the
+/// damping forces (the sign of Dq̇), so the integrator counts their work as dissipation: f·v ≥ 0.
 pub(super) fn apply_tooth_friction(
-    model: &PmorModel,
     poses: [&GearPose; 2],
     sections: &[SectionRows],
     law: SlidingFriction,
     out: &mut ContactLoads,
 ) {
-    let loa = model.pair.loa_length_m();
-    let omega = [poses[0].velocity[0], poses[1].velocity[0]];
     for section in sections {
-        let c = ContactFriction::at(law, loa, section.point_m, omega, section.force_n);
+        let sliding: f64 = (0..2)
+            .map(|i| section.sliding_rows[i].iter().zip(poses[i].velocity).map(|(s, v)| s * v).sum::<f64>())
+            .sum();
+        let f = law.force_n(section.force_n, sliding);
         for i in 0..2 {
-            out.force[i][0] += c.torque_nm[i];
-            out.damping_force[i][0] -= c.torque_nm[i];
+            for (k, s) in section.sliding_rows[i].iter().enumerate() {
+                out.force[i][k] -= f * s;
+                out.damping_force[i][k] += f * s;
+            }
         }
-        out.friction_force_n += c.force_n;
-        out.friction_power_w += c.power_w;
+        out.friction_force_n += f;
+        out.friction_power_w += f * sliding;
     }
 }
 

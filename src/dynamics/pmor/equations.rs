@@ -22,7 +22,7 @@
 //! these lines.
 
 use super::interpolation::Weights;
-use super::model::{Interpolation, PmorGear};
+use super::model::{Interpolation, NodeDirection, PmorGear};
 use crate::contact::mesh_kinematics::Flank;
 use nalgebra::{DMatrix, DVector};
 
@@ -100,21 +100,29 @@ impl PmorGear {
 }
 
 impl PmorGear {
-    /// Adds `weight` times the row of the basis V = [Φ, Ψ] along node k's own flank normal to
-    /// `out`: out += weight·n_kᵀ·[Φ_k, Σₐ wₐ S_{a,k}] (`add_basis_row` with dir = weight·n_k,
-    /// from the rows stored along the normals). Accumulating, so that a band's rows sum in one
-    /// pass per node.
-    pub fn add_normal_basis_row(&self, flank: Flank, st: &Stencil, node: usize, weight: f64, out: &mut [f64]) {
+    /// Adds `weight` times the row of the basis V = [Φ, Ψ] along node k's own flank normal (or
+    /// transverse tangent) to `out`: out += weight·dᵀ·[Φ_k, Σₐ wₐ S_{a,k}] (`add_basis_row` with
+    /// dir = weight·d, from the rows stored along that direction). Accumulating, so that a band's
+    /// rows sum in one pass per node.
+    pub fn add_directed_basis_row(
+        &self,
+        flank: Flank,
+        st: &Stencil,
+        node: usize,
+        along: NodeDirection,
+        weight: f64,
+        out: &mut [f64],
+    ) {
         let rows = self.flank(flank);
         let n_k = self.modes();
         let (phi_part, shape_part) = out.split_at_mut(n_k);
-        for (o, r) in phi_part.iter_mut().zip(rows.phi_normal_row(node)) {
+        for (o, r) in phi_part.iter_mut().zip(rows.phi_row_along(along, node)) {
             *o += weight * r;
         }
         for a in 0..4 {
             let w = weight * st.weights.w[a];
             if w != 0.0 {
-                for (o, r) in shape_part.iter_mut().zip(rows.shape_normal_row(st.a0 + a, node)) {
+                for (o, r) in shape_part.iter_mut().zip(rows.shape_row_along(along, st.a0 + a, node)) {
                     *o += w * r;
                 }
             }

@@ -99,13 +99,27 @@ pub struct FlankRows {
     /// The rows along each node's own flank normal, made from the above on first use (not
     /// stored in the model file).
     #[serde(skip)]
-    normal_rows: Derived<NormalRows>,
+    normal_rows: Derived<DirectionRows>,
+    /// The rows along each node's transverse flank tangent (`FlankGrid::transverse_tangent`),
+    /// tooth friction's direction: made on first use where friction is on.
+    #[serde(skip)]
+    tangent_rows: Derived<DirectionRows>,
 }
 
-/// The basis rows along each node's flank normal, n_kᵀΦ_k and n_kᵀS_{a,k}: the Hertz band loads
-/// every node along its own normal, so its generalized force needs one row per node, not three.
+/// Which of a node's directions a row is taken along.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeDirection {
+    /// The outward flank normal n_k: the Hertz pressure's.
+    Normal,
+    /// The transverse flank tangent t_k (`FlankGrid::transverse_tangent`): tooth friction's.
+    Tangent,
+}
+
+/// The basis rows along one direction per node, dᵀΦ_k and dᵀS_{a,k}: the Hertz band loads every
+/// node along its own normal (friction along its own tangent), so a generalized force needs one
+/// row per node, not three.
 #[derive(Debug, Clone)]
-pub struct NormalRows {
+pub struct DirectionRows {
     /// nodes × n_k, node-major.
     phi: Vec<f64>,
     /// Per stored sample, nodes × n_t, node-major.
@@ -141,38 +155,42 @@ impl FlankRows {
             shape_rows: shapes.iter().map(|s| s.transpose()).collect(),
             largest_node_rows,
             normal_rows: Derived::default(),
+            tangent_rows: Derived::default(),
         }
     }
 
-    fn normal_rows(&self) -> &NormalRows {
-        self.normal_rows.0.get_or_init(|| {
-            let along_normal = |rows: &DMatrix<f64>| -> Vec<f64> {
+    fn direction_rows(&self, along: NodeDirection) -> &DirectionRows {
+        let (cell, direction): (_, &dyn Fn(usize) -> [f64; 3]) = match along {
+            NodeDirection::Normal => (&self.normal_rows, &|k| self.grid.nodes[k].1),
+            NodeDirection::Tangent => (&self.tangent_rows, &|k| self.grid.transverse_tangent(k)),
+        };
+        cell.0.get_or_init(|| {
+            let along = |rows: &DMatrix<f64>| -> Vec<f64> {
                 let n = rows.nrows();
                 let mut out = Vec::with_capacity(n * self.grid.len());
-                for (k, (_, normal)) in self.grid.nodes.iter().enumerate() {
+                for k in 0..self.grid.len() {
+                    let d = direction(k);
                     let node = &rows.as_slice()[3 * k * n..3 * (k + 1) * n];
-                    out.extend(
-                        (0..n).map(|j| normal[0] * node[j] + normal[1] * node[n + j] + normal[2] * node[2 * n + j]),
-                    );
+                    out.extend((0..n).map(|j| d[0] * node[j] + d[1] * node[n + j] + d[2] * node[2 * n + j]));
                 }
                 out
             };
-            NormalRows { phi: along_normal(&self.phi_rows), shapes: self.shape_rows.iter().map(along_normal).collect() }
+            DirectionRows { phi: along(&self.phi_rows), shapes: self.shape_rows.iter().map(along).collect() }
         })
     }
 
-    /// n_kᵀΦ_k at a node (n_k entries).
+    /// dᵀΦ_k at a node along its normal or tangent (n_k entries).
     #[inline]
-    pub fn phi_normal_row(&self, node: usize) -> &[f64] {
+    pub fn phi_row_along(&self, along: NodeDirection, node: usize) -> &[f64] {
         let n = self.phi_rows.nrows();
-        &self.normal_rows().phi[node * n..(node + 1) * n]
+        &self.direction_rows(along).phi[node * n..(node + 1) * n]
     }
 
-    /// n_kᵀS_{a,k} of stored sample a at a node (n_t entries).
+    /// dᵀS_{a,k} of stored sample a at a node along its normal or tangent (n_t entries).
     #[inline]
-    pub fn shape_normal_row(&self, a: usize, node: usize) -> &[f64] {
+    pub fn shape_row_along(&self, along: NodeDirection, a: usize, node: usize) -> &[f64] {
         let n = self.shape_rows[a].nrows();
-        &self.normal_rows().shapes[a][node * n..(node + 1) * n]
+        &self.direction_rows(along).shapes[a][node * n..(node + 1) * n]
     }
 
     /// Row r = 3·node + c of Φ (n_k entries).

@@ -26,7 +26,7 @@
 
 use super::contact::{ContactLoads, GearPose, SectionRows};
 use super::equations::Stencil;
-use super::model::PmorModel;
+use super::model::{NodeDirection, PmorModel};
 use crate::contact::flank_grid::Shares;
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 
@@ -257,6 +257,7 @@ pub fn penalty_contact_loads(
                     force_n: force,
                     stiffness_n_per_m: stiffness,
                     rows: [0, 1].map(|i| vec![0.0; 1 + n_e[i]]),
+                    sliding_rows: [Vec::new(), Vec::new()],
                 });
                 // Generalized forces on η: −F·∂α/∂η, the slave node along its own normal, the
                 // master point along the interpolated one.
@@ -267,7 +268,14 @@ pub fn penalty_contact_loads(
                         Some(n) => {
                             g.add_basis_row(Flank::Drive, &poses[i].stencil, node, n.map(|c| share * c), &mut tmp[i])
                         }
-                        None => g.add_normal_basis_row(Flank::Drive, &poses[i].stencil, node, share, &mut tmp[i]),
+                        None => g.add_directed_basis_row(
+                            Flank::Drive,
+                            &poses[i].stencil,
+                            node,
+                            NodeDirection::Normal,
+                            share,
+                            &mut tmp[i],
+                        ),
                     }
                 };
                 load(slave, k, 1.0, None);

@@ -72,9 +72,10 @@ struct Evaluation {
     dissipation_w: f64,
     /// Per gear, the shapes' damping D_Ψ(ϑ) at this pose (n_t × n_t; empty where undamped).
     shape_damping: [DMatrix<f64>; 2],
-    /// The bodies' damping forces (modal and the mesh damper, from the slow motion's rates; the
-    /// sign of D·q̇) in the fast body coordinates z_Φ, zero on η_Ψ: what the slow projection
-    /// leaves, carried onto the slow motion through the equilibrium (`damp_the_fast_motion`).
+    /// The damping forces (modal, the mesh damper's and tooth friction's, from the slow motion's
+    /// rates; the sign of D·q̇) on the fast coordinates: in z_Φ what the slow projection leaves,
+    /// on η_Ψ friction's (the teeth bent along the flank). Carried onto the slow motion through
+    /// the equilibrium (`damp_the_fast_motion`).
     fast_damping: DVector<f64>,
     outputs: PmorOutputs,
 }
@@ -216,6 +217,7 @@ impl<'a> PmorDynamics<'a> {
             r += n_f;
             for m in 0..n_t {
                 residual[r + m] = elastic_contact(1 + n_k + m) - k_psi_eta[m];
+                fast_damping[r + m] = contact.damping_force[i][1 + n_k + m];
             }
             if let Some(t) = tangent_matrix.as_mut() {
                 t.body.extend((0..n_f).map(|a| (z_off + a, sp.fast_stiffness[a])));
@@ -511,7 +513,10 @@ impl<'a> PmorDynamics<'a> {
         let shapes_damped = e.shape_damping.iter().any(|d| d.nrows() > 0);
         let bodies_damped = self.mesh_damping_n_s_per_m > 0.0 || self.damping.iter().any(|d| d.modes_ratio > 0.0);
         let fast_bodies = qs.splits.iter().any(|sp| sp.fast_body_size() > 0);
-        if !(shapes_damped || (bodies_damped && fast_bodies)) || e.outputs.contact.sections.is_empty() {
+        let friction = self.friction;
+        if !(shapes_damped || (bodies_damped && fast_bodies) || friction.is_some())
+            || e.outputs.contact.sections.is_empty()
+        {
             return Ok(());
         }
         let Some(tangent) = e.tangent.as_ref() else { return Ok(()) };
@@ -545,7 +550,7 @@ impl<'a> PmorDynamics<'a> {
         }
         // The bodies: the fast rates' share of (θ̇, η̇_Φ) per gear, and the damping it adds there.
         let mut on_slow = vec![0.0; n_q];
-        if bodies_damped && fast_bodies {
+        if (bodies_damped && fast_bodies) || friction.is_some() {
             let slow_velocity = [self.slow_body_velocity(qs, &l, y, 0), self.slow_body_velocity(qs, &l, y, 1)];
             let mut fast_velocity: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
             let mut body_force: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
@@ -572,7 +577,7 @@ impl<'a> PmorDynamics<'a> {
             }
             // The mesh damper, per section, with the whole approach rate (`contact::apply_mesh_damper`).
             let total_stiffness: f64 = stiffness.iter().sum();
-            if self.mesh_damping_n_s_per_m > 0.0 && total_stiffness > 0.0 {
+            if self.mesh_damping_n_s_per_m > 0.0 && total_stiffness > 0.0 && fast_bodies {
                 let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
                 let damper = |section: &SectionRows, rate: f64| {
                     section_damper_force_n(section, self.mesh_damping_n_s_per_m, total_stiffness, rate)
@@ -595,6 +600,39 @@ impl<'a> PmorDynamics<'a> {
                     for i in 0..2 {
                         for (f, r) in body_force[i].iter_mut().zip(&section.rows[i][..n_body[i]]) {
                             *f += added * r;
+                        }
+                    }
+                }
+            }
+            // Tooth friction, per section, with the whole sliding (`contact::apply_tooth_friction`):
+            // the bodies' fast rates and the shapes' rates along the flank added to the slow
+            // motion's. What it adds acts on (θ, η_Φ) with the bodies' forces and on η_Ψ directly.
+            if let Some(law) = friction {
+                let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
+                let shapes_at = [qs.splits[0].fast_body_size(), n_z0 + qs.splits[1].fast_body_size()];
+                let contact = &mut e.outputs.contact;
+                for section in contact.sections.iter() {
+                    let s = &section.sliding_rows;
+                    let along = |v: &[Vec<f64>; 2]| -> f64 {
+                        (0..2).map(|i| s[i][..n_body[i]].iter().zip(&v[i]).map(|(r, v)| r * v).sum::<f64>()).sum()
+                    };
+                    let shapes_rate: f64 = (0..2)
+                        .map(|i| s[i][n_body[i]..].iter().zip(&rate.as_slice()[shapes_at[i]..]).map(|(r, v)| r * v).sum::<f64>())
+                        .sum();
+                    let (slow_rate, fast_rate) = (along(&slow_velocity), along(&fast_velocity) + shapes_rate);
+                    let before = law.force_n(section.force_n, slow_rate);
+                    let after = law.force_n(section.force_n, slow_rate + fast_rate);
+                    let added = after - before;
+                    let taken = after * (slow_rate + fast_rate) - before * slow_rate;
+                    power += taken;
+                    contact.friction_power_w += taken;
+                    contact.friction_force_n += added;
+                    for i in 0..2 {
+                        for (f, r) in body_force[i].iter_mut().zip(&s[i][..n_body[i]]) {
+                            *f += added * r;
+                        }
+                        for (m, r) in s[i][n_body[i]..].iter().enumerate() {
+                            damping_force[shapes_at[i] + m] += added * r;
                         }
                     }
                 }
