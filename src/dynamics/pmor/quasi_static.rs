@@ -495,6 +495,11 @@ impl<'a> PmorDynamics<'a> {
     ///   the fast rates' share is added (the mesh damper per section recomputed with the whole
     ///   rate, still never pulling).
     ///
+    /// - **tooth friction** (`contact::apply_tooth_friction`), whose sliding is made of θ̇ and
+    ///   every elastic rate along the flank: the fast rates' share is added per section, f taken
+    ///   at the whole sliding, and its load on η_Ψ and the fast body coordinates carried as the
+    ///   damping's is (issue 42: the teeth bent along the flank, to first order in μ).
+    ///
     /// A damping force d (the sign of D·q̇) acts on the slow coordinates by virtual work: its
     /// slow projection directly, its fast projection through the same tangent,
     /// f = −(∂z/∂y)ᵀd_z = Σ_s r_s·k_s·g_s·K⁻¹·d_z. So the power taken is the damping's own, ≥ 0.
