@@ -113,17 +113,13 @@ fn add_sliding_rows(
     loa_m: f64,
     point_m: f64,
     band: &[(usize, f64)],
-    nodes: &mut NodeDisplacements,
     rows: &mut [f64],
 ) {
-    let grid = &g.flank(flank).grid;
     let sign = flank.sign();
     let mut turning = 0.0;
     for &(k, w) in band {
         g.add_directed_basis_row(flank, &pose.stencil, k, NodeDirection::Tangent, sign * w, &mut rows[1..]);
-        let (_, du) = nodes.get(g, flank, pose, k);
-        let t = grid.transverse_tangent(k);
-        turning += sign * w * (t[0] * du[0] + t[1] * du[1]);
+        turning += sign * w * g.directed_turning(flank, &pose.stencil, k, NodeDirection::Tangent, pose.eta);
     }
     rows[0] = if i == 0 { point_m } else { -(loa_m - point_m) } + turning;
 }
@@ -468,7 +464,7 @@ pub fn section_contact_loads(
                         if friction.is_some() {
                             let (point, sliding) = (section.point_m, &mut section.sliding_rows[i]);
                             let loa = p.loa_length_m();
-                            add_sliding_rows(g, i, flank, poses[i], loa, point, &band, &mut nodes[i], sliding);
+                            add_sliding_rows(g, i, flank, poses[i], loa, point, &band, sliding);
                         }
                     }
                 }

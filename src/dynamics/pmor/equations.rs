@@ -72,6 +72,23 @@ impl PmorGear {
         (u, du)
     }
 
+    /// dᵀ∂u/∂ϑ of node k of `flank` along its normal or tangent, at fixed η: the shapes'
+    /// turning with the gear, Σₐ w′ₐ/Δϑ · dᵀS_{a,k}η_Ψ (from the rows stored along d: one row per
+    /// sample, not three).
+    pub fn directed_turning(&self, flank: Flank, st: &Stencil, node: usize, along: NodeDirection, eta: &[f64]) -> f64 {
+        let rows = self.flank(flank);
+        let eta_psi = &eta[self.modes()..];
+        let mut turning = 0.0;
+        for a in 0..4 {
+            let dw = st.weights.dw[a] / st.step;
+            if dw != 0.0 {
+                let row = rows.shape_row_along(along, st.a0 + a, node);
+                turning += dw * row.iter().zip(eta_psi).map(|(r, e)| r * e).sum::<f64>();
+            }
+        }
+        turning
+    }
+
     /// A bound on |u| at every node of `flank`: |Φ_k η_Φ + Σₐ wₐ S_{a,k} η_Ψ| ≤
     /// max‖Φ_k‖·|η_Φ| + Σₐ|wₐ|·max‖S_{a,k}‖·|η_Ψ|. The contact skips a section whose rigid gap
     /// exceeds the two gears' bounds: it cannot close, so nothing is lost by not reading it.
