@@ -453,7 +453,9 @@ pub fn section_contact_loads(
                     for &(k, w) in &band {
                         match normal {
                             Some(n) => g.add_basis_row(flank, &poses[i].stencil, k, n.map(|c| w * c), row),
-                            None => g.add_directed_basis_row(flank, &poses[i].stencil, k, NodeDirection::Normal, w, row),
+                            None => {
+                                g.add_directed_basis_row(flank, &poses[i].stencil, k, NodeDirection::Normal, w, row)
+                            }
                         }
                     }
                     for (f, r) in out.force[i][1..].iter_mut().zip(row.iter()) {

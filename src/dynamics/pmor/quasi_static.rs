@@ -622,7 +622,13 @@ impl<'a> PmorDynamics<'a> {
                         (0..2).map(|i| s[i][..n_body[i]].iter().zip(&v[i]).map(|(r, v)| r * v).sum::<f64>()).sum()
                     };
                     let shapes_rate: f64 = (0..2)
-                        .map(|i| s[i][n_body[i]..].iter().zip(&rate.as_slice()[shapes_at[i]..]).map(|(r, v)| r * v).sum::<f64>())
+                        .map(|i| {
+                            s[i][n_body[i]..]
+                                .iter()
+                                .zip(&rate.as_slice()[shapes_at[i]..])
+                                .map(|(r, v)| r * v)
+                                .sum::<f64>()
+                        })
                         .sum();
                     let (slow_rate, fast_rate) = (along(&slow_velocity), along(&fast_velocity) + shapes_rate);
                     let before = law.force_n(section.force_n, slow_rate);
