@@ -64,8 +64,9 @@ pub struct ContactLoads {
     pub damper_force_n: f64,
     pub damper_power_w: f64,
     /// Tooth friction (`apply_tooth_friction`; zero without it): the friction forces' sum
-    /// (N, each signed as its sliding) and their power Σ f·v ≥ 0 (W). Its torques are part of
-    /// `force` and `damping_force`, as the damper's are.
+    /// (N, each signed as its sliding) and their power Σ f·v ≥ 0 (W). Its generalized forces (on
+    /// the angles and the elastic coordinates) are part of `force` and `damping_force`, as the
+    /// damper's are.
     pub friction_force_n: f64,
     pub friction_power_w: f64,
     /// The loaded sections' rows, where asked for (the mesh damper, the quasi-static
@@ -121,7 +122,8 @@ fn add_sliding_rows(
         g.add_directed_basis_row(flank, &pose.stencil, k, NodeDirection::Tangent, sign * w, &mut rows[1..]);
         turning += sign * w * g.directed_turning(flank, &pose.stencil, k, NodeDirection::Tangent, pose.eta);
     }
-    rows[0] = if i == 0 { point_m } else { -(loa_m - point_m) } + turning;
+    let arm = if i == 0 { point_m } else { -(loa_m - point_m) };
+    rows[0] = arm + turning;
 }
 
 /// Gear i's elastic approach at a contact point: nᵀũ, with n the flank normal and ũ the

@@ -40,7 +40,10 @@
 //! shapes' damping D_Ψ sees η̇_Ψ, and what they load the fast coordinates with is carried onto
 //! the slow motion through the equilibrium's tangent (`damp_the_fast_motion`; issue 38: without
 //! the shapes' rate the mesh mode lost the full pair's shape damping, without the condensed body
-//! modes' rate the mesh damper damped it 8–20 % more than in the full pair at the same c).
+//! modes' rate the mesh damper damped it 8–20 % more than in the full pair at the same c). Tooth
+//! friction is taken the same way (issue 42): the flanks slide with every coordinate's rate, and
+//! its load on the fast coordinates (the teeth bent along the flank) reaches the slow motion
+//! through the tangent, to first order in μ.
 //!
 //! The hub direction is condensed only where its free frequency (the pencil (Λ, M_ΦΦ − bbᵀ/J) on
 //! the retained modes) lies above the cut-off: a bore given a shaft's inertia (`inertia_i` above
@@ -486,7 +489,7 @@ impl<'a> PmorDynamics<'a> {
     /// The damping of the fast coordinates' motion, carried onto the slow motion. The fast
     /// coordinates are quasi-static, so their rate follows the slow velocity v through the
     /// equilibrium (the implicit function theorem, as `Prediction`): K·ż = −Σ_s k_s·g_s·(r_s·v).
-    /// Two dampings see that rate in the full pair:
+    /// Two dampings and tooth friction see that rate in the full pair:
     ///
     /// - **the shapes' D_Ψ** (the build's `shape_damping_ratio`) on η̇_Ψ;
     /// - **the bodies' damping** — the condensed body modes' modal damping and the mesh damper,
@@ -639,9 +642,12 @@ impl<'a> PmorDynamics<'a> {
                     contact.friction_power_w += taken;
                     contact.friction_force_n += added;
                     for i in 0..2 {
+                        debug_assert_eq!(s[i].len(), n_body[i] + self.model.gears[i].shapes, "friction's rows");
                         for (f, r) in body_force[i].iter_mut().zip(&s[i][..n_body[i]]) {
                             *f += added * r;
                         }
+                        // The mesh torque output (`force` on θ) carries the whole friction.
+                        contact.force[i][0] -= added * s[i][0];
                         for (m, r) in s[i][n_body[i]..].iter().enumerate() {
                             damping_force[shapes_at[i] + m] += added * r;
                         }
