@@ -1192,6 +1192,26 @@ fn the_mesh_damper_never_pulls_and_only_dissipates() {
     assert!(separations >= 2 && flanks[0] > 0 && flanks[1] > 0, "the teeth must strike both flanks and separate");
 }
 
+/// Example 3 as a master couples it: 185 N·m after a 5 ms haversine ramp, a viscous brake of
+/// 20 N·m·s/rad fed back from the port's speed each 20 µs, 25 ms from `s`. Returns the DTE over
+/// 20–25 ms, sampled each 20 µs: mean, RMS about the mean and peak-to-peak (m).
+fn example_3_coupled_dte(m: &PmorModel, d: &PmorDynamics, s: &mut PmorState, max_step_s: f64) -> [f64; 3] {
+    let comm = 2e-5;
+    let mut dte = Vec::new();
+    for k in 0..1250 {
+        let t = k as f64 * comm;
+        let tau = 185.0 * if t < 5e-3 { 0.5 * (1.0 - (PI * t / 5e-3).cos()) } else { 1.0 };
+        let w2 = d.port(1, s).unwrap().1;
+        d.advance(s, [tau, -20.0 * w2], comm, max_step_s).unwrap();
+        dte.push(te(m, s));
+    }
+    let tail = &dte[1000..];
+    let mean = tail.iter().sum::<f64>() / tail.len() as f64;
+    let rms = (tail.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / tail.len() as f64).sqrt();
+    let pp = tail.iter().cloned().fold(f64::MIN, f64::max) - tail.iter().cloned().fold(f64::MAX, f64::min);
+    [mean, rms, pp]
+}
+
 /// The quasi-static condensation (`quasi_static`) against the full reduced pair on the same
 /// model (evidence: the full model, every coordinate with its inertia, as reference). Example 3
 /// (185 N·m haversine ramp 5 ms, viscous brake 20 N·m·s/rad fed back from the port's speed each
@@ -1221,21 +1241,9 @@ fn the_quasi_static_condensation_keeps_example_3s_dte_at_a_longer_step() {
         let step = linear::default_step(&d).unwrap();
         let mut s = d.start_state([0.0; 2], [0.0; 2], [0.0; 2]).unwrap();
         let e0 = d.outputs(&s).unwrap().total_energy_j();
-        let comm = 2e-5;
-        let mut dte = Vec::new();
-        for k in 0..1250 {
-            let t = k as f64 * comm;
-            let tau = 185.0 * if t < 5e-3 { 0.5 * (1.0 - (PI * t / 5e-3).cos()) } else { 1.0 };
-            let w2 = d.port(1, &s).unwrap().1;
-            d.advance(&mut s, [tau, -20.0 * w2], comm, step.max_step_s).unwrap();
-            dte.push(te(m, &s));
-        }
-        let tail = &dte[1000..];
-        let mean = tail.iter().sum::<f64>() / tail.len() as f64;
-        let rms = (tail.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / tail.len() as f64).sqrt();
-        let pp = tail.iter().cloned().fold(f64::MIN, f64::max) - tail.iter().cloned().fold(f64::MAX, f64::min);
+        let figures = example_3_coupled_dte(m, &d, &mut s, step.max_step_s);
         let balance = d.outputs(&s).unwrap().total_energy_j() + s.dissipated_j - s.input_work_j - e0;
-        (step, [mean, rms, pp], balance / s.input_work_j)
+        (step, figures, balance / s.input_work_j)
     };
     let (full_step, full, full_balance) = run(Condensation::None, None);
     let (qs_step, qs, qs_balance) = run(Condensation::QuasiStatic, None);
@@ -1301,20 +1309,7 @@ fn the_condensed_pair_carries_tooth_friction_as_the_full_pair_does() {
             _ => linear::default_step(&d).unwrap().max_step_s,
         };
         let mut s = d.start_state([0.0; 2], [0.0; 2], [0.0; 2]).unwrap();
-        let comm = 2e-5;
-        let mut dte = Vec::new();
-        for k in 0..1250 {
-            let t = k as f64 * comm;
-            let tau = 185.0 * if t < 5e-3 { 0.5 * (1.0 - (PI * t / 5e-3).cos()) } else { 1.0 };
-            let w2 = d.port(1, &s).unwrap().1;
-            d.advance(&mut s, [tau, -20.0 * w2], comm, max_step_s).unwrap();
-            dte.push(te(m, &s));
-        }
-        let tail = &dte[1000..];
-        let mean = tail.iter().sum::<f64>() / tail.len() as f64;
-        let rms = (tail.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / tail.len() as f64).sqrt();
-        let pp = tail.iter().cloned().fold(f64::MIN, f64::max) - tail.iter().cloned().fold(f64::MAX, f64::min);
-        [mean, rms, pp]
+        example_3_coupled_dte(m, &d, &mut s, max_step_s)
     };
     let (full, full_mu) = (run(Condensation::None, 0.0), run(Condensation::None, 0.05));
     let (qs, qs_mu) = (run(Condensation::QuasiStatic, 0.0), run(Condensation::QuasiStatic, 0.05));

@@ -1,6 +1,6 @@
 //! A spec's errors, each naming the field and the rule it broke, and how a message prints a
-//! number (`sig`): shared by the spec and the
-//! sections it reads through other modules (flank modifications).
+//! number (`sig`): shared by the spec and the sections it reads through other modules (flank
+//! modifications, lubrication).
 
 /// Errors of a spec: each names the field and the rule it broke.
 #[derive(Debug, thiserror::Error)]

@@ -384,6 +384,7 @@ pub fn section_contact_loads(
     let layers = &model.gears[0].flank(Flank::Drive).grid.layer_z_m;
     let sections = layers.len() - 1;
     let base = [p.gear1.base_radius_m, p.gear2.base_radius_m];
+    let loa = p.loa_length_m();
     let info = &model.info;
     let theta = [poses[0].theta, poses[1].theta];
     let spur = p.base_helix_angle_rad == 0.0;
@@ -467,7 +468,6 @@ pub fn section_contact_loads(
                         section.rows[i][1..].copy_from_slice(row);
                         if friction.is_some() {
                             let (point, sliding) = (section.point_m, &mut section.sliding_rows[i]);
-                            let loa = p.loa_length_m();
                             add_sliding_rows(g, i, flank, poses[i], loa, point, &band, sliding);
                         }
                     }

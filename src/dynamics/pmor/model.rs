@@ -160,23 +160,30 @@ impl FlankRows {
     }
 
     fn direction_rows(&self, along: NodeDirection) -> &DirectionRows {
-        let (cell, direction): (_, &dyn Fn(usize) -> [f64; 3]) = match along {
-            NodeDirection::Normal => (&self.normal_rows, &|k| self.grid.nodes[k].1),
-            NodeDirection::Tangent => (&self.tangent_rows, &|k| self.grid.transverse_tangent(k)),
+        let cell = match along {
+            NodeDirection::Normal => &self.normal_rows,
+            NodeDirection::Tangent => &self.tangent_rows,
         };
-        cell.0.get_or_init(|| {
-            let along = |rows: &DMatrix<f64>| -> Vec<f64> {
-                let n = rows.nrows();
-                let mut out = Vec::with_capacity(n * self.grid.len());
-                for k in 0..self.grid.len() {
-                    let d = direction(k);
-                    let node = &rows.as_slice()[3 * k * n..3 * (k + 1) * n];
-                    out.extend((0..n).map(|j| d[0] * node[j] + d[1] * node[n + j] + d[2] * node[2 * n + j]));
-                }
-                out
-            };
-            DirectionRows { phi: along(&self.phi_rows), shapes: self.shape_rows.iter().map(along).collect() }
-        })
+        cell.0.get_or_init(|| self.rows_along(along))
+    }
+
+    /// The rows of Φ and of every stored sample projected on each node's direction.
+    fn rows_along(&self, along: NodeDirection) -> DirectionRows {
+        let direction = |k: usize| match along {
+            NodeDirection::Normal => self.grid.nodes[k].1,
+            NodeDirection::Tangent => self.grid.transverse_tangent(k),
+        };
+        let project = |rows: &DMatrix<f64>| -> Vec<f64> {
+            let n = rows.nrows();
+            let mut out = Vec::with_capacity(n * self.grid.len());
+            for k in 0..self.grid.len() {
+                let d = direction(k);
+                let node = &rows.as_slice()[3 * k * n..3 * (k + 1) * n];
+                out.extend((0..n).map(|j| d[0] * node[j] + d[1] * node[n + j] + d[2] * node[2 * n + j]));
+            }
+            out
+        };
+        DirectionRows { phi: project(&self.phi_rows), shapes: self.shape_rows.iter().map(project).collect() }
     }
 
     /// dᵀΦ_k at a node along its normal or tangent (n_k entries).

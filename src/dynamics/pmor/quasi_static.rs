@@ -584,9 +584,9 @@ impl<'a> PmorDynamics<'a> {
                 body_force[i] = f;
             }
             // The mesh damper, per section, with the whole approach rate (`contact::apply_mesh_damper`).
+            let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
             let total_stiffness: f64 = stiffness.iter().sum();
             if self.mesh_damping_n_s_per_m > 0.0 && total_stiffness > 0.0 && fast_bodies {
-                let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
                 let damper = |section: &SectionRows, rate: f64| {
                     section_damper_force_n(section, self.mesh_damping_n_s_per_m, total_stiffness, rate)
                 };
@@ -616,7 +616,6 @@ impl<'a> PmorDynamics<'a> {
             // the bodies' fast rates and the shapes' rates along the flank added to the slow
             // motion's. What it adds acts on (θ, η_Φ) with the bodies' forces and on η_Ψ directly.
             if let Some(law) = friction {
-                let n_body = [1 + self.model.gears[0].modes(), 1 + self.model.gears[1].modes()];
                 let shapes_at = [qs.splits[0].fast_body_size(), n_z0 + qs.splits[1].fast_body_size()];
                 let contact = &mut e.outputs.contact;
                 for section in contact.sections.iter() {
