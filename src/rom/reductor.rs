@@ -55,10 +55,13 @@ pub enum Coordinates {
     /// K_r = I (PMOR-Hertz's SVD basis scaled to unit stiffness, checked when it is built): the
     /// response to a reduced load is the load itself.
     UnitStiffness,
-    /// K_r = C, the normal flexibility of the loadable nodes (standard CMS, one attachment mode
-    /// per node): q are the nodal normal forces, and the response to unit forces along the node
-    /// normals, shared as w, is w.
-    NodalForces,
+    /// K_r = C, the flexibility of the loadable nodes along their load directions (standard CMS,
+    /// one attachment mode per node and direction): q are the nodal forces, and the response to
+    /// unit forces along the node normals, shared as w, is w. With `tangents`, a second block of
+    /// n_c coordinates holds the forces along the nodes' transverse flank tangents (tooth
+    /// friction's, `FlankGrid::transverse_tangent`), so that the statics stay exact FE statics
+    /// under friction too.
+    NodalForces { tangents: bool },
 }
 
 /// The reduced coordinates a flank load produces, K_r⁻¹·b: dense, or sparse where the
@@ -83,6 +86,22 @@ impl LoadResponse {
         match self {
             LoadResponse::Dense(r) => q.iter_mut().zip(r).for_each(|(a, b)| *a += scale * b),
             LoadResponse::Sparse(w) => w.iter().for_each(|&(k, v)| q[k] += scale * v),
+        }
+    }
+
+    /// self + scale·other: the response to two loads together (a normal load and its friction).
+    /// Both come from one gear, so they are both dense or both sparse.
+    pub fn plus(self, scale: f64, other: &LoadResponse) -> LoadResponse {
+        match (self, other) {
+            (LoadResponse::Dense(mut a), LoadResponse::Dense(b)) => {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x += scale * y);
+                LoadResponse::Dense(a)
+            }
+            (LoadResponse::Sparse(mut a), LoadResponse::Sparse(b)) => {
+                a.extend(b.iter().map(|&(k, v)| (k, scale * v)));
+                LoadResponse::Sparse(a)
+            }
+            _ => unreachable!("one gear's responses are all dense or all sparse"),
         }
     }
 }
@@ -148,8 +167,45 @@ impl ReducedGear {
     pub fn load_response(&self, shares: &Shares) -> LoadResponse {
         match self.coordinates {
             Coordinates::UnitStiffness => LoadResponse::Dense(self.inward_load_row(shares)),
-            Coordinates::NodalForces => LoadResponse::Sparse(shares.clone()),
+            Coordinates::NodalForces { .. } => LoadResponse::Sparse(shares.clone()),
         }
+    }
+
+    /// The reduced coordinates that unit forces along the nodes' transverse flank tangents
+    /// (`FlankGrid::transverse_tangent`), shared as given, produce: K_r⁻¹ times
+    /// [`ReducedGear::tangential_load_row`]. `Err` for a standard CMS basis built without the
+    /// tangents: its span does not hold the response, and a Galerkin answer in it would pass a
+    /// basis error off as the baseline's.
+    pub fn tangential_load_response(&self, shares: &Shares) -> Result<LoadResponse, String> {
+        match self.coordinates {
+            Coordinates::UnitStiffness => Ok(LoadResponse::Dense(self.tangential_load_row(shares))),
+            Coordinates::NodalForces { tangents: true } => {
+                let n_c = self.flank.len();
+                Ok(LoadResponse::Sparse(shares.iter().map(|&(k, w)| (n_c + k, w)).collect()))
+            }
+            Coordinates::NodalForces { tangents: false } => Err(
+                "tooth friction in the statics needs the standard CMS basis built with the flank tangents \
+                 (`standard_cms_with_flank_tangents`)"
+                    .into(),
+            ),
+        }
+    }
+
+    /// The reduced load of forces of unit total along each node's transverse flank tangent
+    /// t_k (`FlankGrid::transverse_tangent`), shared as given: Σ w_k·t_kᵀ·Ψ_k.
+    pub fn tangential_load_row(&self, shares: &Shares) -> Vec<f64> {
+        let mut row = vec![0.0; self.size()];
+        for &(k, w) in shares {
+            let t = self.flank.transverse_tangent(k);
+            for c in 0..3 {
+                if t[c] != 0.0 {
+                    for (j, v) in row.iter_mut().enumerate() {
+                        *v += w * t[c] * self.flank_modes[(3 * k + c, j)];
+                    }
+                }
+            }
+        }
+        row
     }
 
     /// The reduced load of forces of unit total along each node's inward normal, shared as given.
@@ -277,24 +333,55 @@ pub const UNIT_STIFFNESS_CHECKED_COLUMNS: usize = 16;
 /// Standard CMS: ψ = K⁻¹F, one column per loadable node (a unit load along its inward normal).
 /// Then K_CMS = ψᵀKψ = Fᵀψ, read off the flank rows.
 pub fn standard_cms(model: &ClampedGear, factor: &dyn LinearSolve, flank: FlankGrid) -> (ReducedGear, Reconstructor) {
+    standard_cms_along(model, factor, flank, false)
+}
+
+/// Standard CMS with a second attachment mode per loadable node, a unit load along its
+/// transverse flank tangent (`FlankGrid::transverse_tangent`): the baseline of the statics with
+/// tooth friction, exact FE statics for any normal and tangential loads on those nodes. Twice
+/// the solves of [`standard_cms`].
+pub fn standard_cms_with_flank_tangents(
+    model: &ClampedGear,
+    factor: &dyn LinearSolve,
+    flank: FlankGrid,
+) -> (ReducedGear, Reconstructor) {
+    standard_cms_along(model, factor, flank, true)
+}
+
+fn standard_cms_along(
+    model: &ClampedGear,
+    factor: &dyn LinearSolve,
+    flank: FlankGrid,
+    tangents: bool,
+) -> (ReducedGear, Reconstructor) {
     let n_c = flank.len();
-    let mut basis = Mat::zeros(model.dofs.n_free, n_c);
-    for (j, &(node, normal)) in flank.nodes.iter().enumerate() {
+    // Column j's load direction at its node: the inward normal, then (with tangents) the tangent.
+    let direction = |j: usize| if j < n_c { flank.nodes[j].1.map(|v| -v) } else { flank.transverse_tangent(j - n_c) };
+    let n_r = if tangents { 2 * n_c } else { n_c };
+    let mut basis = Mat::zeros(model.dofs.n_free, n_r);
+    for j in 0..n_r {
+        let (node, d) = (flank.nodes[j % n_c].0, direction(j));
         for c in 0..3 {
             if let Some(i) = model.dofs.free[3 * node + c] {
-                basis[(i, j)] = -normal[c];
+                basis[(i, j)] = d[c];
             }
         }
     }
     factor.solve_block(&mut basis);
     let flank_modes = flank_rows(&basis, &model.dofs, &flank);
-    let stiffness = Mat::from_fn(n_c, n_c, |a, b| {
+    let stiffness = Mat::from_fn(n_r, n_r, |a, b| {
         let f = |row: usize, col: usize| {
-            -(0..3).map(|c| flank.nodes[row].1[c] * flank_modes[(3 * row + c, col)]).sum::<f64>()
+            let d = direction(row);
+            (0..3).map(|c| d[c] * flank_modes[(3 * (row % n_c) + c, col)]).sum::<f64>()
         };
         0.5 * (f(a, b) + f(b, a))
     });
-    let reduced =
-        ReducedGear { flank, flank_modes, stiffness, coordinates: Coordinates::NodalForces, local_depth_m: None };
+    let reduced = ReducedGear {
+        flank,
+        flank_modes,
+        stiffness,
+        coordinates: Coordinates::NodalForces { tangents },
+        local_depth_m: None,
+    };
     (reduced, Reconstructor { basis, dofs: model.dofs.clone() })
 }

@@ -3,7 +3,7 @@
 //! then the cases run in parallel.
 
 use super::flank::FlankGrid;
-use super::reductor::{pmor_hertz, standard_cms, CompressionReport, ReducedGear};
+use super::reductor::{pmor_hertz, standard_cms, standard_cms_with_flank_tangents, CompressionReport, ReducedGear};
 use super::statics::{ContactModel, StaticCase, StaticModel};
 use crate::contact::mesh_kinematics::{Flank, PairPlacement};
 use crate::fe::clamped_gear::ClampedGear;
@@ -41,13 +41,28 @@ impl ReducedPair {
     ) -> Result<Self, String> {
         // Generic only at the door: the body below is compiled once, here, not again in
         // every crate (each test, fmu-build) that passes a progress closure of its own.
-        Self::build_dyn(pair, mesh, method, &progress)
+        Self::build_dyn(pair, mesh, method, false, &progress)
+    }
+
+    /// As [`ReducedPair::build`], for statics with tooth friction
+    /// (`sweep_with_friction`): the penalty baseline's gears take a second attachment mode per
+    /// node, along its flank tangent (`reductor::standard_cms_with_flank_tangents`, twice the
+    /// solves), so that friction's load lies in their basis. PMOR-Hertz's basis is the same
+    /// either way: friction's load is projected on it, as in the dynamics.
+    pub fn build_for_friction(
+        pair: &GearPair,
+        mesh: &MeshSpec,
+        method: Method,
+        progress: impl Fn(usize, usize) + Sync,
+    ) -> Result<Self, String> {
+        Self::build_dyn(pair, mesh, method, true, &progress)
     }
 
     fn build_dyn(
         pair: &GearPair,
         mesh: &MeshSpec,
         method: Method,
+        friction: bool,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Self, String> {
         let place = PairPlacement::new(pair);
@@ -63,6 +78,9 @@ impl ReducedPair {
                         pmor_hertz(&model, factor.as_ref(), grid, depth_m, p_en, |n| progress(i, n))?;
                     gears.push(reduced);
                     reports.push(report);
+                }
+                Method::Penalty { .. } if friction => {
+                    gears.push(standard_cms_with_flank_tangents(&model, factor.as_ref(), grid).0)
                 }
                 Method::Penalty { .. } => gears.push(standard_cms(&model, factor.as_ref(), grid).0),
             }
@@ -84,7 +102,19 @@ impl ReducedPair {
     /// the reference position, half a step in), for each torque; parallel over cases. Positions
     /// beyond the first pitch use the tooth periodicity of the mesh (exact).
     pub fn sweep(&self, torques_nm: &[f64], angles: usize, pitches: f64) -> Vec<Result<StaticCase, String>> {
-        let model = match self.static_model() {
+        self.sweep_with_friction(torques_nm, angles, pitches, 0.0)
+    }
+
+    /// [`ReducedPair::sweep`] with tooth friction of Coulomb coefficient μ at every contact
+    /// (`StaticModel::with_friction`); a penalty pair must come from `build_for_friction`.
+    pub fn sweep_with_friction(
+        &self,
+        torques_nm: &[f64],
+        angles: usize,
+        pitches: f64,
+        friction_coefficient: f64,
+    ) -> Vec<Result<StaticCase, String>> {
+        let model = match self.static_model().and_then(|m| m.with_friction(friction_coefficient)) {
             Ok(model) => model,
             Err(e) => return vec![Err(e); torques_nm.len() * angles],
         };

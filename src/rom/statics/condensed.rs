@@ -8,8 +8,10 @@
 //!   α_e = α₀_e + s_e·y + Σ_f H_ef·P_f,   H_ef = Σ_i g_e,i·u_f,i,
 //! where −H is the flexibility (influence-coefficient) matrix of the contact elements. Only the
 //! forces of the active elements and y = r_b1θ₁ − te_ref are unknown; on the active set A
-//!   δ_e(P_e) = α_e  (e ∈ A),   Σ_A s_e·P_e = T₁/r_b1,
-//! with δ the law's approach (Hertz: its closed form δ(P), no inner inverse; penalty: P/k). Modified
+//!   δ_e(P_e) = α_e  (e ∈ A),   Σ_A s̃_e·P_e = T₁/r_b1,
+//! with s̃ = s + μσu/r_b1 the torque arm friction lengthens or shortens (and u_f the response to
+//! the element's normal load and its friction together),
+//! δ the law's approach (Hertz: its closed form δ(P), no inner inverse; penalty: P/k). Modified
 //! Newton–Raphson (the paper's Table 2) solves it: the Jacobian diag(δ′) − H_AA bordered by s
 //! leaves out how a Hertz band's width moves its loads with P.
 //! The active set changes between Newton solves: an element whose Newton force turns tensile
@@ -46,8 +48,9 @@ impl Element {
 }
 
 impl StaticModel<'_> {
-    /// The responses of both gears to an element's unit force, its Hertz band sized for force P.
-    fn unit_responses(&self, e: &mut Element, force_n: f64) -> [LoadResponse; 2] {
+    /// The responses of both gears to an element's unit normal force and the friction it
+    /// carries (μσ along the tangent), its Hertz band sized for force P.
+    fn unit_responses(&self, e: &mut Element, force_n: f64) -> Result<[LoadResponse; 2], String> {
         if let Law::Hertz { contact, geometry } = &e.law {
             let beta = contact.half_width(force_n);
             e.result.half_width_m = beta;
@@ -55,7 +58,15 @@ impl StaticModel<'_> {
                 e.load_shares = shares;
             }
         }
-        [self.gears[0].load_response(&e.load_shares[0]), self.gears[1].load_response(&e.load_shares[1])]
+        let response = |i: usize| -> Result<LoadResponse, String> {
+            let normal = self.gears[i].load_response(&e.load_shares[i]);
+            if e.friction_per_normal == 0.0 {
+                return Ok(normal);
+            }
+            let tangential = self.gears[i].tangential_load_response(&e.load_shares[i])?;
+            Ok(normal.plus(-e.friction_per_normal, &tangential))
+        };
+        Ok([response(0)?, response(1)?])
     }
 
     /// q_i = Σ_A P_f·u_f,i.
@@ -105,7 +116,7 @@ impl StaticModel<'_> {
                     return Err("every contact element left the contact: no position carries the torque".into());
                 }
                 for &f in &active {
-                    responses[f] = Some(self.unit_responses(&mut elements[f], force[f]));
+                    responses[f] = Some(self.unit_responses(&mut elements[f], force[f])?);
                 }
                 let q = self.reduced_of(&active, &force, &responses);
                 let na = active.len();
@@ -122,14 +133,14 @@ impl StaticModel<'_> {
                         ));
                     }
                     rhs[a] = el.penetration(y, &q) - delta;
-                    rhs[na] -= el.arm * force[e];
+                    rhs[na] -= el.torque_arm * force[e];
                     for (b, &f) in active.iter().enumerate() {
                         let u = responses[f].as_ref().expect("responses of the active elements");
                         jacobian[(a, b)] = -(u[0].dot(&el.gap[0]) + u[1].dot(&el.gap[1]));
                     }
                     jacobian[(a, a)] += compliance;
                     jacobian[(a, na)] = -el.arm;
-                    jacobian[(na, a)] = el.arm;
+                    jacobian[(na, a)] = el.torque_arm;
                 }
                 let step = jacobian.lu().solve(&rhs).ok_or("singular condensed contact Jacobian")?;
                 let leaving: Vec<usize> =
@@ -156,7 +167,7 @@ impl StaticModel<'_> {
             }
             // The converged state, with the bands at the converged forces.
             for &f in &active {
-                responses[f] = Some(self.unit_responses(&mut elements[f], force[f]));
+                responses[f] = Some(self.unit_responses(&mut elements[f], force[f])?);
             }
             let q = self.reduced_of(&active, &force, &responses);
             let threshold = JOIN_TOLERANCE * (te_ref + y).abs().max(1e-9);
@@ -171,7 +182,7 @@ impl StaticModel<'_> {
                 // First force: the penetration over the law's secant compliance plus the
                 // element's own structural compliance −H_ee.
                 let trial = elements[e].force(alpha)?.0;
-                let own = self.unit_responses(&mut elements[e], trial);
+                let own = self.unit_responses(&mut elements[e], trial)?;
                 let h_ee = own[0].dot(&elements[e].gap[0]) + own[1].dot(&elements[e].gap[1]);
                 force[e] = alpha / (alpha / trial - h_ee.min(0.0));
                 active.push(e);

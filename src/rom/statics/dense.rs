@@ -68,8 +68,10 @@ impl StaticModel<'_> {
                         let beta = contact.half_width(force);
                         e.result.half_width_m = beta;
                         if let Some(shares) = self.hertz_band_shares(geometry, beta) {
-                            e.load =
-                                [self.gears[0].inward_load_row(&shares[0]), self.gears[1].inward_load_row(&shares[1])];
+                            e.load = [
+                                self.load_row(0, &shares[0], e.friction_per_normal),
+                                self.load_row(1, &shares[1], e.friction_per_normal),
+                            ];
                             e.load_shares = shares;
                         }
                     }
@@ -77,7 +79,7 @@ impl StaticModel<'_> {
                 if force == 0.0 && slope == 0.0 {
                     continue;
                 }
-                r[0] -= force * e.arm;
+                r[0] -= force * e.torque_arm;
                 for i in 0..2 {
                     let off = if i == 0 { 1 } else { 1 + n1 };
                     for (a, b) in e.load[i].iter().enumerate() {
@@ -91,7 +93,7 @@ impl StaticModel<'_> {
                         .chain(e.gap[0].iter().enumerate().map(|(a, v)| (1 + a, *v)))
                         .chain(e.gap[1].iter().enumerate().map(|(a, v)| (1 + n1 + a, *v)))
                         .collect();
-                    let rows: Vec<(usize, f64)> = std::iter::once((0, e.arm))
+                    let rows: Vec<(usize, f64)> = std::iter::once((0, e.torque_arm))
                         .chain(e.load[0].iter().enumerate().map(|(a, v)| (1 + a, *v)))
                         .chain(e.load[1].iter().enumerate().map(|(a, v)| (1 + n1 + a, *v)))
                         .collect();

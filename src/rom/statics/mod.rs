@@ -5,6 +5,14 @@
 //! unknowns, α = α₀ + s·(r_b1θ₁ − ref) + g₁·q₁ + g₂·q₂, a force P(α) ≥ 0, and the reduced loads
 //! P·b₁, P·b₂ it puts on the gears. Equilibrium is
 //!   T₁/r_b1 = Σ s·P,    K_i·q_i = Σ P·b_i   (i = 1, 2),
+//! With tooth friction (`StaticModel::with_friction`, Coulomb's μ) each element also puts a
+//! tangential load μσP along the flanks' transverse tangents on both gears, against the sliding
+//! of a pair turning in its mesh sense: σ = sign(ω₁ρ₁ − ω₂ρ₂), the rigid flanks' sliding
+//! (`dynamics::mesh_friction`), −1 before the pitch point and +1 beyond it. Its arm about gear
+//! 1's axis is ρ₁ = u (the contact's place on the line of action), so the torque row becomes
+//!   T₁/r_b1 = Σ P·(s + μσ·u/r_b1),
+//! and the gears' loads P·(b_i − μσ·t_i), with t_i the band's rows along the tangent. Both are
+//! linear in P: the condensed solver keeps its unknowns, its matrix loses its symmetry.
 //! For PMOR-Hertz the elements are the axial sections of the tooth pairs, P(α) the inverse of the
 //! Hertz load–approach relation and b the Hertz pressure band integrated over the flank; for the
 //! penalty baseline they are flank nodes against the mating flank (node-to-surface, both passes)
@@ -23,7 +31,7 @@ use super::reductor::ReducedGear;
 use crate::closed_forms::iso6336;
 use crate::closed_forms::root_stress;
 use crate::contact::hertz::ApproachLaw;
-use crate::contact::mesh_kinematics::{ContactKind, Flank, PairPlacement, SectionContact};
+use crate::contact::mesh_kinematics::{line_of_action_point_m, ContactKind, Flank, PairPlacement, SectionContact};
 use crate::gear::GearPair;
 
 /// How the flanks push on each other.
@@ -51,6 +59,9 @@ pub struct ElementResult {
     pub radius_m: [f64; 2],
     /// The force's moment arm on gear 1 over r_b1.
     pub arm_ratio: f64,
+    /// The tangential (friction) force on gear 1's flank, signed as the sliding it opposes
+    /// (N; 0 without friction): μσP.
+    pub friction_force_n: f64,
 }
 
 /// The outcome of one static analysis.
@@ -120,6 +131,8 @@ pub struct StaticModel<'a> {
     pub placement: PairPlacement,
     pub gears: [&'a ReducedGear; 2],
     pub contact: ContactModel,
+    /// Coulomb's μ of tooth friction (0: frictionless, the default).
+    pub friction_coefficient: f64,
 }
 
 enum Law {
@@ -134,7 +147,12 @@ struct Element {
     key: ElementKey,
     result: ElementResult,
     alpha0: f64,
+    /// ∂α/∂y: the normal force's arm on gear 1 over r_b1.
     arm: f64,
+    /// The element's arm in the torque balance over r_b1: `arm` plus friction's μσ·u/r_b1.
+    torque_arm: f64,
+    /// μσ: the tangential load per unit normal force, signed as the sliding it opposes.
+    friction_per_normal: f64,
     gap: [Vec<f64>; 2],
     load: [Vec<f64>; 2],
     /// The nodal shares of `load` (unit forces along the node normals).
@@ -170,7 +188,53 @@ impl<'a> StaticModel<'a> {
                 }
             }
         }
-        Ok(StaticModel { placement: PairPlacement::new(pair), gears, contact })
+        Ok(StaticModel { placement: PairPlacement::new(pair), gears, contact, friction_coefficient: 0.0 })
+    }
+
+    /// The same model with tooth friction of Coulomb coefficient μ at every contact element.
+    /// `Err` for μ outside [0, 1), or a standard CMS basis built without the flank tangents
+    /// (`reductor::standard_cms_with_flank_tangents`), which cannot carry friction's load.
+    pub fn with_friction(mut self, coefficient: f64) -> Result<Self, String> {
+        if !(0.0..1.0).contains(&coefficient) {
+            return Err(format!("friction coefficient must lie in [0, 1), got {coefficient}"));
+        }
+        if coefficient > 0.0 {
+            for g in self.gears {
+                g.tangential_load_response(&Vec::new())?;
+            }
+        }
+        self.friction_coefficient = coefficient;
+        Ok(self)
+    }
+
+    /// σ = sign(ω₁ρ₁ − ω₂ρ₂) of a contact at u (m from T₁ on the transverse line of action) of
+    /// a pair turning in its mesh sense, ω₂ = ω₁·r_b1/r_b2: −1 before the pitch point, +1
+    /// beyond, 0 on it.
+    fn sliding_sign(&self, point_m: f64) -> f64 {
+        let p = self.pair();
+        let v = point_m / p.gear1.base_radius_m - (p.loa_length_m() - point_m) / p.gear2.base_radius_m;
+        if v == 0.0 {
+            0.0
+        } else {
+            v.signum()
+        }
+    }
+
+    /// (torque arm, μσ) of a contact at u with normal arm `arm` (both over r_b1).
+    fn friction_arms(&self, arm: f64, point_m: f64) -> (f64, f64) {
+        let mu_sigma = self.friction_coefficient * self.sliding_sign(point_m);
+        (arm + mu_sigma * point_m / self.pair().gear1.base_radius_m, mu_sigma)
+    }
+
+    /// The reduced loads of gear `i` per unit normal force, shared as given: the inward normal's
+    /// and friction's, b − μσ·t.
+    fn load_row(&self, i: usize, shares: &Shares, friction_per_normal: f64) -> Vec<f64> {
+        let mut row = self.gears[i].inward_load_row(shares);
+        if friction_per_normal != 0.0 {
+            let t = self.gears[i].tangential_load_row(shares);
+            row.iter_mut().zip(&t).for_each(|(b, t)| *b -= friction_per_normal * t);
+        }
+        row
     }
 
     /// The depth h of the Hertz approach: the one the gears were reduced at.
@@ -213,6 +277,10 @@ impl<'a> StaticModel<'a> {
                     self.gears[1].projected_row(&s2, self.gears[1].flank.normal(&s2)),
                 ];
                 let contact = c.line_contact(self.pair(), z[s + 1] - z[s], depth_m, law);
+                let point_m = line_of_action_point_m(self.pair(), c.kind, c.radius_m);
+                let (torque_arm, friction_per_normal) = self.friction_arms(c.arm_ratio, point_m);
+                // A point load until the first force gives the band its width.
+                let load = [self.load_row(0, &s1, friction_per_normal), self.load_row(1, &s2, friction_per_normal)];
                 out.push(Element {
                     key: (j, s, 2, 0),
                     result: ElementResult {
@@ -224,11 +292,13 @@ impl<'a> StaticModel<'a> {
                         half_width_m: 0.0,
                         radius_m: c.radius_m,
                         arm_ratio: c.arm_ratio,
+                        friction_force_n: 0.0,
                     },
                     alpha0: c.rigid_penetration_m,
                     arm: c.arm_ratio,
-                    // A point load until the first force gives the band its width.
-                    load: [gap[0].iter().map(|v| -v).collect(), gap[1].iter().map(|v| -v).collect()],
+                    torque_arm,
+                    friction_per_normal,
+                    load,
                     gap,
                     load_shares: [s1, s2],
                     law: Law::Hertz { contact, geometry: c },
@@ -296,15 +366,17 @@ impl<'a> StaticModel<'a> {
                     } else {
                         cos_bb * place.arm_on_gear1_of_gear2_normal(w, theta[1], j, z) / p.gear1.base_radius_m
                     };
+                    let point_m = line_of_action_point_m(p, ContactKind::Conjugate, radii);
+                    let (torque_arm, friction_per_normal) = self.friction_arms(arm, point_m);
                     let slave_shares = vec![(k, 1.0)];
                     let mut gap = [Vec::new(), Vec::new()];
                     let mut load = [Vec::new(), Vec::new()];
                     let mut load_shares = [Vec::new(), Vec::new()];
                     gap[slave] = self.gears[slave].projected_row(&slave_shares, normal);
-                    load[slave] = self.gears[slave].inward_load_row(&slave_shares);
+                    load[slave] = self.load_row(slave, &slave_shares, friction_per_normal);
                     let n_master = self.gears[master].flank.normal(&master_shares);
                     gap[master] = self.gears[master].projected_row(&master_shares, n_master);
-                    load[master] = self.gears[master].inward_load_row(&master_shares);
+                    load[master] = self.load_row(master, &master_shares, friction_per_normal);
                     load_shares[slave] = slave_shares;
                     load_shares[master] = master_shares;
                     out.push(Element {
@@ -318,9 +390,12 @@ impl<'a> StaticModel<'a> {
                             half_width_m: 0.0,
                             radius_m: radii,
                             arm_ratio: arm,
+                            friction_force_n: 0.0,
                         },
                         alpha0,
                         arm,
+                        torque_arm,
+                        friction_per_normal,
                         gap,
                         load,
                         load_shares,
@@ -377,8 +452,11 @@ impl<'a> StaticModel<'a> {
                             .map_err(|m| format!("{}, tooth pair {}: {m}", at(), e.result.pair))?;
                     }
                 }
-                let loaded: Vec<ElementResult> =
-                    elements.iter().map(|e| e.result).filter(|r| r.force_n > 0.0).collect();
+                let loaded: Vec<ElementResult> = elements
+                    .iter()
+                    .map(|e| ElementResult { friction_force_n: e.friction_per_normal * e.result.force_n, ..e.result })
+                    .filter(|r| r.force_n > 0.0)
+                    .collect();
                 let mut pairs: Vec<i64> = loaded.iter().map(|e| e.pair).collect();
                 pairs.sort();
                 pairs.dedup();
@@ -482,7 +560,7 @@ fn rigid_guess(elements: &[Element], target: f64) -> Result<f64, String> {
     let total = |te: f64| -> Result<f64, String> {
         let mut f = 0.0;
         for e in elements {
-            f += e.force(e.alpha0 + e.arm * te)?.0 * e.arm;
+            f += e.force(e.alpha0 + e.arm * te)?.0 * e.torque_arm;
         }
         Ok(f)
     };
