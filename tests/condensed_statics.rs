@@ -23,7 +23,12 @@ fn pair(file: &str) -> (GearPair, PairSpec) {
 /// force of every tooth pair and the reduced coordinates (the global contact shapes of the
 /// dynamics). Returns the per-case times (dense, condensed) in seconds.
 fn compare(reduced: &ReducedPair, torques_nm: &[f64], angles: usize) -> (f64, f64) {
-    let model = reduced.static_model().unwrap();
+    compare_with_friction(reduced, torques_nm, angles, 0.0)
+}
+
+/// `compare` with tooth friction of coefficient μ (`StaticModel::with_friction`).
+fn compare_with_friction(reduced: &ReducedPair, torques_nm: &[f64], angles: usize, mu: f64) -> (f64, f64) {
+    let model = reduced.static_model().unwrap().with_friction(mu).unwrap();
     let pitch = 2.0 * std::f64::consts::PI / reduced.pair.gear2.teeth as f64;
     let (mut dense_s, mut condensed_s, mut cases) = (0.0, 0.0, 0);
     let mut worst = [0.0_f64; 3];
@@ -93,5 +98,18 @@ fn condensed_equals_dense_for_both_methods_helical() {
     for method in [method, Method::Penalty { factor: 100.0 }] {
         let reduced = ReducedPair::build(&p, &spec.mesh, method, |_, _| {}).unwrap();
         compare(&reduced, &[21.07, 1835.462], 4);
+    }
+}
+
+/// With tooth friction (μ = 0.05, issue 42) the condensed matrix is no longer symmetric: the
+/// torque row takes the friction arms, the responses the tangential loads. Both methods on the
+/// spur pair, the penalty baseline's gears with their flank-tangent attachment modes.
+#[test]
+fn condensed_equals_dense_with_tooth_friction_spur() {
+    let (p, spec) = pair("kurokawa_spur.toml");
+    let method = Method::PmorHertz { depth_m: 3e-3, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
+    for method in [method, Method::Penalty { factor: 100.0 }] {
+        let reduced = ReducedPair::build_for_friction(&p, &spec.mesh, method, |_, _| {}).unwrap();
+        compare_with_friction(&reduced, &[370.251], 12, 0.05);
     }
 }

@@ -1,7 +1,13 @@
-//! Tooth friction in the statics (issue 42): experiment.
+//! Tooth friction in the statics (issue 42, `rom::statics::StaticModel::with_friction`): each
+//! contact element's tangential load μσP along the flank tangents, and its arm u in the torque
+//! balance. Evidence: the standard CMS baseline built with one attachment mode per loadable node
+//! along its normal and one along its transverse tangent
+//! (`reductor::standard_cms_with_flank_tangents`): exact FE statics for any nodal loads on the
+//! flank, on the same (coarse default) mesh.
 
 use gearfmu::contact::hertz::ApproachLaw;
 use gearfmu::gear::{GearPair, PairSpec};
+use gearfmu::rom::reductor::ReducedGear;
 use gearfmu::rom::sweep::{Method, ReducedPair};
 
 fn pair(file: &str) -> (GearPair, PairSpec) {
@@ -10,94 +16,115 @@ fn pair(file: &str) -> (GearPair, PairSpec) {
     (GearPair::from_spec(&spec).unwrap(), spec)
 }
 
-#[test]
-fn experiment() {
-    let (p, spec) = pair("kurokawa_spur.toml");
+/// Both reductions of a pair, ready for friction: PMOR-Hertz (the FMU's) and the penalty
+/// baseline on standard CMS with the flank tangents.
+fn both(file: &str) -> (ReducedPair, ReducedPair) {
+    let (p, spec) = pair(file);
     let hertz = Method::PmorHertz { depth_m: 3e-3, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
-    let t0 = std::time::Instant::now();
     let a = ReducedPair::build_for_friction(&p, &spec.mesh, hertz, |_, _| {}).unwrap();
-    eprintln!("pmor build {:.1} s", t0.elapsed().as_secs_f64());
-    let t0 = std::time::Instant::now();
     let b = ReducedPair::build_for_friction(&p, &spec.mesh, Method::Penalty { factor: 100.0 }, |_, _| {}).unwrap();
-    eprintln!("penalty build {:.1} s", t0.elapsed().as_secs_f64());
+    (a, b)
+}
+
+/// The normal displacement a unit tangential load causes where it acts, c_nt = nᵀu(t), at a
+/// point of the flank (n the interpolated normal, as the statics' gap rows take it).
+fn cross_compliance(g: &ReducedGear, tooth: usize, r: f64, section: usize) -> f64 {
+    let shares = g.flank.point_shares(tooth, r, section).unwrap();
+    let normal_row = g.projected_row(&shares, g.flank.normal(&shares));
+    g.tangential_load_response(&shares).unwrap().dot(&normal_row)
+}
+
+/// Friction's load reaches the STE through c_nt, the normal displacement of a flank point under
+/// a tangential load there. PMOR-Hertz's basis holds the responses to normal flank loads only,
+/// less their local part; friction's load is projected on it (here and in the dynamics). Evidence:
+/// the same compliance of the FE itself (standard CMS with the flank tangents, exact for nodal
+/// loads). Both gears of the spur and the helical pair, an end and the middle axial section, at
+/// the midpoints between the flank's node rows.
+///
+/// In the flank's interior (all but the outermost row interval at the root and the tip) c_nt is
+/// asked within 10 % of the FE's; measured within 5.6 %, mostly 0.5–3 %. In the outermost
+/// intervals, and at the node rows themselves, the FE's nodal load carries a local field the
+/// PMOR-Hertz basis leaves out by construction (the deformation within h of the load), and it
+/// grows toward the free tip: c_nt falls 7–37 % below the FE's there (printed). That field is
+/// the half-space's (Cerruti's), and for two flanks of one material its normal displacements on
+/// the two surfaces are equal and opposite: it does not change the approach.
+#[test]
+fn the_pmor_hertz_basis_carries_a_tangential_flank_load_as_the_fe_does() {
+    let mut worst_interior = 0.0_f64;
+    for file in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
+        let (a, b) = both(file);
+        for i in 0..2 {
+            let rows = a.gears[i].flank.row_radius_m.clone();
+            let sections = a.gears[i].flank.layer_z_m.len() - 1;
+            let tooth = a.gears[i].flank.teeth[0];
+            for section in [0, sections / 2] {
+                for k in 0..rows.len() - 1 {
+                    let r = 0.5 * (rows[k] + rows[k + 1]);
+                    let pmor = cross_compliance(&a.gears[i], tooth, r, section);
+                    let fe = cross_compliance(&b.gears[i], tooth, r, section);
+                    let interior = k > 0 && k + 2 < rows.len();
+                    let deviation = pmor / fe - 1.0;
+                    eprintln!(
+                        "{file} gear {} section {section} r {:.2} mm: c_nt PMOR-Hertz {pmor:.4e}, FE {fe:.4e} m/N ({:+.1} %){}",
+                        i + 1,
+                        r * 1e3,
+                        deviation * 100.0,
+                        if interior { "" } else { "  (outermost interval)" }
+                    );
+                    assert!(fe > 0.0, "a tangential load along t pushes the flank out along n here");
+                    if interior {
+                        worst_interior = worst_interior.max(deviation.abs());
+                        assert!(deviation.abs() <= 0.10, "{file} gear {} r {r}: c_nt {pmor:e} vs FE {fe:e}", i + 1);
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("worst in the interior: {:.1} %", worst_interior * 100.0);
+}
+
+/// Friction's change of the mean STE over a mesh cycle, PMOR-Hertz against the penalty baseline
+/// (standard CMS with the flank tangents), μ = 0.05, Table 4's heavier load and 185 N·m: within
+/// 10 % of the change. The two models' STE differ by far more on this coarse flank (the
+/// penalty's node-to-surface error, `pmor_hertz_statics`' header): what is compared is what
+/// friction does to each. The change is small (−0.4 %): the arm effect on the normal force
+/// (T₁/r_b1 = ΣP·(s + μσu/r_b1)) and the tangential load's normal displacement nearly cancel in
+/// the deformation that turns the gear about its axis, whose normal and tangential projections
+/// are in the ratio r_b : u. Both are printed per position.
+#[test]
+fn friction_changes_the_mean_ste_as_the_penalty_baseline_does() {
+    let (a, b) = both("kurokawa_spur.toml");
     let angles = 24;
     for torque in [185.0, 370.251] {
-        for (name, r) in [("pmor", &a), ("penalty", &b)] {
-            let s0 = r.sweep_with_friction(&[torque], angles, 1.0, 0.0);
-            let s1 = r.sweep_with_friction(&[torque], angles, 1.0, 0.05);
-            let mut m = [0.0; 2];
+        let mut change = Vec::new();
+        for (name, reduced) in [("PMOR-Hertz", &a), ("penalty", &b)] {
+            let without = reduced.sweep_with_friction(&[torque], angles, 1.0, 0.0);
+            let with = reduced.sweep_with_friction(&[torque], angles, 1.0, 0.05);
+            let (mut mean_without, mut mean_with) = (0.0, 0.0);
             for k in 0..angles {
-                let (c0, c1) = (s0[k].as_ref().unwrap(), s1[k].as_ref().unwrap());
-                m[0] += c0.ste_m / angles as f64;
-                m[1] += c1.ste_m / angles as f64;
-                let fr: f64 = c1.elements.iter().map(|e| e.friction_force_n).sum();
+                let (c0, c1) = (without[k].as_ref().unwrap(), with[k].as_ref().unwrap());
+                mean_without += c0.ste_m / angles as f64;
+                mean_with += c1.ste_m / angles as f64;
+                let friction: f64 = c1.elements.iter().map(|e| e.friction_force_n).sum();
                 eprintln!(
-                    "{name} T {torque} k {k:2}: pairs {} STE0 {:.4} STEμ {:.4} µm Δ {:+.3} %  F0 {:.1} Fμ {:.1} friction {:.1}",
+                    "{name} {torque} N·m, position {k:2}: {} pair(s), STE {:.4} → {:.4} µm ({:+.3} %), normal force {:.1} → {:.1} N, friction {friction:+.1} N",
                     c1.pairs_in_contact,
                     c0.ste_m * 1e6,
                     c1.ste_m * 1e6,
                     (c1.ste_m / c0.ste_m - 1.0) * 100.0,
                     c0.mesh_force_n,
                     c1.mesh_force_n,
-                    fr
                 );
             }
-            eprintln!("{name} T {torque}: mean STE0 {:.4} STEμ {:.4} Δ {:+.3} %", m[0] * 1e6, m[1] * 1e6, (m[1] / m[0] - 1.0) * 100.0);
+            eprintln!(
+                "{name} {torque} N·m: mean STE {:.4} → {:.4} µm ({:+.3} %)",
+                mean_without * 1e6,
+                mean_with * 1e6,
+                (mean_with / mean_without - 1.0) * 100.0
+            );
+            change.push(mean_with / mean_without - 1.0);
         }
-    }
-}
-
-#[test]
-fn cross_compliance() {
-    for file in ["kurokawa_spur.toml", "kurokawa_helical.toml"] {
-        let (p, spec) = pair(file);
-        let hertz = Method::PmorHertz { depth_m: 3e-3, p_en: gearfmu::rom::svd::DEFAULT_P_EN, law: ApproachLaw::Weber };
-        let a = ReducedPair::build_for_friction(&p, &spec.mesh, hertz, |_, _| {}).unwrap();
-        let b = ReducedPair::build_for_friction(&p, &spec.mesh, Method::Penalty { factor: 100.0 }, |_, _| {}).unwrap();
-        for i in 0..2 {
-            let g = &a.gears[i];
-            let rows = &g.flank.row_radius_m;
-            let sections = g.flank.layer_z_m.len() - 1;
-            let tooth = g.flank.teeth[0];
-            for s in [0, sections / 2] {
-                for k in 0..2 * rows.len() - 1 {
-                    let r = if k % 2 == 0 { rows[k / 2] } else { 0.5 * (rows[k / 2] + rows[k / 2 + 1]) };
-                    let mut out = Vec::new();
-                    for red in [&a.gears[i], &b.gears[i]] {
-                        let sh = red.flank.point_shares(tooth, r, s).unwrap();
-                        let gap = red.projected_row(&sh, red.flank.normal(&sh));
-                        let nt = red.tangential_load_response(&sh).unwrap().dot(&gap);
-                        let nn = red.load_response(&sh).dot(&gap);
-                        // reciprocity: tangential displacement from normal load
-                        let trow = {
-                            let mut row = vec![0.0; red.size()];
-                            for &(kk, w) in &sh {
-                                let t = red.flank.transverse_tangent(kk);
-                                let pr = red.projected_row(&vec![(kk, w)], t);
-                                row.iter_mut().zip(&pr).for_each(|(x, y)| *x += y);
-                            }
-                            row
-                        };
-                        let tn = red.load_response(&sh).dot(&trow);
-                        let tt = red.tangential_load_response(&sh).unwrap().dot(&trow);
-                        out.push((nt, nn, tn, tt));
-                    }
-                    eprintln!(
-                        "{file} gear {} s {s} r {:.2} mm: c_nt pmor {:.3e} fe {:.3e} ({:+.1} %); c_nn {:.3e} / {:.3e}; c_tn {:.3e}/{:.3e}; c_tt {:.3e}/{:.3e}",
-                        i + 1,
-                        r * 1e3,
-                        out[0].0,
-                        out[1].0,
-                        (out[0].0 / out[1].0 - 1.0) * 100.0,
-                        out[0].1,
-                        out[1].1,
-                        out[0].2,
-                        out[1].2,
-                        out[0].3,
-                        out[1].3,
-                    );
-                }
-            }
-        }
+        assert!(change[0] < 0.0 && change[1] < 0.0, "friction lowers the mean STE in both");
+        assert!((change[0] / change[1] - 1.0).abs() <= 0.10, "{torque} N·m: relative change {change:?}");
     }
 }
