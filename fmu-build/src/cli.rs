@@ -7,7 +7,7 @@ use gearfmu::fe::gear_mesh::{MeshSpec, ProfileGrading};
 use gearfmu::gear::{GearPair, PairSpec};
 use std::path::{Path, PathBuf};
 
-use crate::cli_values::{count, damping_ratio, energy_share, positive_number};
+use crate::cli_values::{count, damping_ratio, energy_share, friction_coefficient, positive_number};
 use crate::drivetrain;
 
 #[derive(Parser)]
@@ -272,10 +272,18 @@ pub(crate) enum Command {
         /// PMOR-Hertz: the paper's Eq. 20 (made consistent) instead of Weber's approach.
         #[arg(long)]
         eq20: bool,
+        /// Tooth friction: Coulomb's μ at every contact, against the sliding of the pair turning
+        /// in its mesh sense (the friction arms in the torque balance, the tangential loads on the
+        /// teeth). Default 0: the STE as ISO and the literature define it, whatever the spec's
+        /// friction. The penalty baseline then reduces with a second attachment mode per node,
+        /// along the flank tangent.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = friction_coefficient)]
+        friction: f64,
         #[command(flatten)]
         resolution: Resolution,
         /// One row per case: method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact,
-        /// k_h_beta, then the load per face width of each axial section (line_load_<s>_n_per_mm)
+        /// k_h_beta, friction_torque_nm (friction's torque on gear 1, against its mesh sense), then
+        /// the load per face width of each axial section (line_load_<s>_n_per_mm)
         #[arg(long)]
         csv: Option<PathBuf>,
         /// STE (µm) against θ₂, one curve per torque, contact zones marked. Drawn by

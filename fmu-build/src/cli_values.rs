@@ -37,6 +37,16 @@ pub(crate) fn energy_share(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A Coulomb friction coefficient in [0, 1).
+pub(crate) fn friction_coefficient(text: &str) -> Result<f64, String> {
+    let v = number(text)?;
+    if (0.0..1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("must be in [0, 1) (a Coulomb coefficient of tooth friction), got {}", gearfmu::gear::sig(v)))
+    }
+}
+
 /// A damping ratio in [0, 1).
 pub(crate) fn damping_ratio(text: &str) -> Result<f64, String> {
     let v = number(text)?;

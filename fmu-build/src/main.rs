@@ -46,8 +46,21 @@ fn main() {
         Command::Ssp { gear_fmu, output, options, library } => {
             drivetrain::ssp_command(&gear_fmu, &output, &options, library)
         }
-        Command::Ste { spec, torque_nm, angles, pitches, method, depth_mm, p_en, eq20, resolution, csv, png } => {
-            let options = ste::SteOptions { torque_nm, angles, pitches, method, depth_mm, p_en, eq20 };
+        Command::Ste {
+            spec,
+            torque_nm,
+            angles,
+            pitches,
+            method,
+            depth_mm,
+            p_en,
+            eq20,
+            friction,
+            resolution,
+            csv,
+            png,
+        } => {
+            let options = ste::SteOptions { torque_nm, angles, pitches, method, depth_mm, p_en, eq20, friction };
             ste::ste_with_defaults(&spec, options, resolution, ste::StePlots { csv, png })
         }
     };

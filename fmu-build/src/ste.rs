@@ -14,22 +14,33 @@ use crate::cli::{contact_depth_or_default, pair_and_mesh_or, Resolution, StaticM
 
 use crate::progress::spinner;
 
+/// The positions of a sweep, and its tooth friction.
+pub(crate) struct SweepOptions {
+    pub(crate) angles: usize,
+    pub(crate) pitches: f64,
+    /// Coulomb's μ (0: frictionless).
+    pub(crate) friction: f64,
+}
+
 /// Reduces the pair, runs the sweep (progress on stderr), prints a summary per torque and writes
 /// the CSV.
 pub(crate) fn ste_command(
     pair: &GearPair,
     mesh_spec: &MeshSpec,
     torques: &[f64],
-    angles: usize,
-    pitches: f64,
+    sweep_options: SweepOptions,
     method: Method,
     out: StePlots,
 ) -> Result<()> {
+    let SweepOptions { angles, pitches, friction } = sweep_options;
     let started = std::time::Instant::now();
     let bar = spinner("reducing both gears".into());
-    let reduced = ReducedPair::build(pair, mesh_spec, method, |gear, done| {
-        bar.set_message(format!("gear {}: {done} partial models", gear + 1))
-    })
+    let progress = |gear: usize, done: usize| bar.set_message(format!("gear {}: {done} partial models", gear + 1));
+    let reduced = if friction > 0.0 {
+        ReducedPair::build_for_friction(pair, mesh_spec, method, progress)
+    } else {
+        ReducedPair::build(pair, mesh_spec, method, progress)
+    }
     .map_err(anyhow::Error::msg)?;
     let offline = started.elapsed().as_secs_f64();
     if let Some(reports) = &reduced.compression {
@@ -39,8 +50,11 @@ pub(crate) fn ste_command(
     }
     bar.set_message(format!("{} static cases", angles * torques.len()));
     let sweep_start = std::time::Instant::now();
-    let cases: Vec<_> =
-        reduced.sweep(torques, angles, pitches).into_iter().collect::<Result<_, _>>().map_err(anyhow::Error::msg)?;
+    let cases: Vec<_> = reduced
+        .sweep_with_friction(torques, angles, pitches, friction)
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .map_err(anyhow::Error::msg)?;
     let sweep = sweep_start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let name = match method {
@@ -74,6 +88,17 @@ pub(crate) fn ste_command(
             stiffness / iso,
             stiffness_mean_of_positions / iso
         );
+        if friction > 0.0 {
+            let at_t: Vec<_> = cases.iter().filter(|c| c.torque_nm == t).collect();
+            let mean_friction_torque = at_t.iter().map(|c| c.friction_torque_nm(pair)).sum::<f64>() / at_t.len() as f64;
+            let mean_force = at_t.iter().map(|c| c.mesh_force_n).sum::<f64>() / at_t.len() as f64;
+            println!(
+                "  tooth friction μ = {}: mean friction torque on gear 1 {mean_friction_torque:.3} N·m against its mesh sense \
+                 ({:.3} % of T₁); mean normal force {mean_force:.1} N",
+                sig(friction),
+                100.0 * mean_friction_torque / t
+            );
+        }
         // A modified pair's loaded contact ratio: below 1 the reliefs are deeper than the load
         // closes over part of the cycle; say so.
         let place = gearfmu::contact::mesh_kinematics::PairPlacement::new(pair);
@@ -157,21 +182,24 @@ pub(crate) fn ste_command(
     );
     // One column per axial section (PMOR-Hertz) or node layer (penalty): the load per face width.
     let sections = if penalty { layers.len() } else { layers.len() - 1 };
-    let mut table = String::from("method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact,k_h_beta");
+    let mut table = String::from(
+        "method,torque_nm,theta1_rad,theta2_rad,ste_m,mesh_force_n,pairs_in_contact,k_h_beta,friction_torque_nm",
+    );
     for s in 0..sections {
         table += &format!(",line_load_{s}_n_per_mm");
     }
     table.push('\n');
     for c in &cases {
         table += &format!(
-            "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{},{:.6}",
+            "{name},{},{:.12e},{:.12e},{:.9e},{:.6e},{},{:.6},{:.6e}",
             c.torque_nm,
             c.theta_rad[0],
             c.theta_rad[1],
             c.ste_m,
             c.mesh_force_n,
             c.pairs_in_contact,
-            c.face_load_factor(layers, penalty)
+            c.face_load_factor(layers, penalty),
+            c.friction_torque_nm(pair)
         );
         for w in c.face_load(layers, penalty).0 {
             table += &format!(",{:.6e}", w * 1e-3);
@@ -204,6 +232,7 @@ pub(crate) struct SteOptions {
     pub(crate) depth_mm: Option<f64>,
     pub(crate) p_en: f64,
     pub(crate) eq20: bool,
+    pub(crate) friction: f64,
 }
 
 /// `ste` with the spec's defaults: its operating torque, and a contact depth of half its module.
@@ -219,7 +248,8 @@ pub(crate) fn ste_with_defaults(spec: &Path, o: SteOptions, resolution: Resoluti
         },
         StaticMethod::Penalty => Method::Penalty { factor: gearfmu::rom::statics::DEFAULT_PENALTY_FACTOR },
     };
-    ste_command(&pair, &mesh_spec, &torque_nm, o.angles, o.pitches, method, out)
+    let sweep = SweepOptions { angles: o.angles, pitches: o.pitches, friction: o.friction };
+    ste_command(&pair, &mesh_spec, &torque_nm, sweep, method, out)
 }
 
 /// Where `ste` writes its table and its plot.

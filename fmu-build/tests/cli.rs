@@ -64,6 +64,8 @@ const EXAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/kurokawa
 fn p_en_above_one_is_refused_naming_the_option_and_its_range() {
     refused(&["build", EXAMPLE, "-o", "x.fmu", "--p-en", "1.5"], &["--p-en", "(0, 1]", "1.5"]);
     refused(&["ste", EXAMPLE, "--p-en", "0"], &["--p-en", "(0, 1]"]);
+    refused(&["ste", EXAMPLE, "--friction", "1.5"], &["--friction", "[0, 1)", "1.5"]);
+    refused(&["ste", EXAMPLE, "--friction", "-0.1"], &["--friction", "[0, 1)"]);
 }
 
 /// The standard PMOR reference is the paper's model (standard CMS gears, RK4 on every

@@ -183,11 +183,11 @@ impl ReducedGear {
                 let n_c = self.flank.len();
                 Ok(LoadResponse::Sparse(shares.iter().map(|&(k, w)| (n_c + k, w)).collect()))
             }
-            Coordinates::NodalForces { tangents: false } => Err(
-                "tooth friction in the statics needs the standard CMS basis built with the flank tangents \
+            Coordinates::NodalForces { tangents: false } => {
+                Err("tooth friction in the statics needs the standard CMS basis built with the flank tangents \
                  (`standard_cms_with_flank_tangents`)"
-                    .into(),
-            ),
+                    .into())
+            }
         }
     }
 

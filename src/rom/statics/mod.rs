@@ -112,6 +112,13 @@ impl StaticCase {
         load.iter().fold(0.0f64, |m, &w| m.max(w)) / (total / face)
     }
 
+    /// Friction's torque on gear 1 against its mesh sense (N·m): Σ f·u, each element's friction
+    /// force (signed as the sliding) on its arm u, the contact's place on the line of action.
+    /// Zero without friction; positive where it takes torque from the driver.
+    pub fn friction_torque_nm(&self, pair: &GearPair) -> f64 {
+        self.elements.iter().map(|e| e.friction_force_n * line_of_action_point_m(pair, e.kind, e.radius_m)).sum()
+    }
+
     /// Normal force carried by each tooth pair, by pair index.
     pub fn force_per_pair(&self) -> Vec<(i64, f64)> {
         let mut out: Vec<(i64, f64)> = Vec::new();
