@@ -11,7 +11,7 @@ use sha2::{Digest, Sha256};
 use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = b"GEARFMU\0";
-pub const FORMAT_VERSION: u32 = 16;
+pub const FORMAT_VERSION: u32 = 17;
 pub const FILE_NAME: &str = "model.bin";
 
 /// `ModelKind::Element`'s place among the variants (postcard's variant index).

@@ -704,9 +704,19 @@ fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCas
             field_f64(m.input_work_j),
             field_f64(m.dissipated_j),
             field_f64(m.friction_dissipated_j),
+            field_f64(m.friction_elastic_work_j),
         )
             .prop_map(
-                |(theta_1, omega_1, theta_2, omega_2, input_work_j, dissipated_j, friction_dissipated_j)| {
+                |(
+                    theta_1,
+                    omega_1,
+                    theta_2,
+                    omega_2,
+                    input_work_j,
+                    dissipated_j,
+                    friction_dissipated_j,
+                    friction_elastic_work_j,
+                )| {
                     gearfmu::dynamics::lumped::LumpedState {
                         theta_1,
                         omega_1,
@@ -715,6 +725,7 @@ fn forged_state(real: Snapshot<GearPairState>) -> impl Strategy<Value = StateCas
                         input_work_j,
                         dissipated_j,
                         friction_dissipated_j,
+                        friction_elastic_work_j,
                     }
                 },
             )

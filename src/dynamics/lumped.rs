@@ -107,9 +107,17 @@ impl LumpedMesh {
         let offset_index = (roll_offset / pair.base_pitch_m * n as f64).round() as usize;
         let mirror = |i: usize| (2 * offset_index + 2 * n - i) % n;
         let k = levels.len();
-        let coast_rows: Vec<f64> =
-            (0..n).flat_map(|i| drive.deflection_m[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
-        let coast = MeshLaw::new(pair.base_pitch_m, levels, coast_rows);
+        let mirrored = |table: &[f64]| -> Vec<f64> {
+            (0..n).flat_map(|i| table[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect()
+        };
+        let mut coast = MeshLaw::new(pair.base_pitch_m, levels, mirrored(&drive.deflection_m));
+        if drive.has_friction_share() {
+            // The mirror turns the speeds round, and friction with them: the coast law is read at
+            // −λ (`LumpedModel::friction_share`), so its rows are the drive's, mirrored.
+            coast = coast
+                .with_friction_share(mirrored(&drive.friction_deflection_m), crate::gear::MAX_FRICTION_COEFFICIENT)
+                .expect("the drive law's share, mirrored, passes the drive law's own check");
+        }
         let coast_pairs = (0..n).flat_map(|i| drive_pairs[mirror(i) * k..(mirror(i) + 1) * k].to_vec()).collect();
         let coast_spread = drive_spread.with_rows_from(mirror);
         let reference_force = 200.0e3 * pair.face_width_m;
@@ -175,6 +183,17 @@ pub struct LumpedParameters {
     /// constant `friction_coefficient`.
     #[serde(default)]
     pub lubrication: LubricatedFlanks,
+    /// The sense the pair rolls in, in [−1, 1] (`LumpedModel::rolling_sense`): +1 forward, as
+    /// the statics that tabulated friction's elastic share; −1 reversed; near 0 at rest, where
+    /// the regularized friction vanishes. The share is λ = μ × this (`mesh_law`). Held over a
+    /// step, as μ is; the FMU sets it at each step's start and books what its change does to
+    /// the stored energy (`LumpedState::friction_elastic_work_j`).
+    #[serde(default = "forward")]
+    pub rolling_sense: f64,
+}
+
+fn forward() -> f64 {
+    1.0
 }
 
 impl LumpedParameters {
@@ -245,6 +264,11 @@ pub struct LumpedState {
     /// ∫Σ f·v dt: work dissipated by tooth friction (never decreasing).
     #[serde(default)]
     pub friction_dissipated_j: f64,
+    /// The work that changes of friction's elastic share λ did on the mesh (J): the stored
+    /// energy's change at fixed state each time λ changed (a new μ, a new rolling sense), which
+    /// the law's potential does not book. Zero while λ is held.
+    #[serde(default)]
+    pub friction_elastic_work_j: f64,
 }
 
 /// What the mesh does at one instant.
@@ -312,6 +336,7 @@ impl LumpedParameters {
             friction_coefficient: mesh.friction_coefficient,
             sliding_regularization_m_per_s: MIN_SLIDING_REGULARIZATION_M_PER_S,
             lubrication: mesh.lubricated_flanks.unwrap_or_default(),
+            rolling_sense: forward(),
         }
     }
 }
@@ -335,6 +360,22 @@ impl<'a> LumpedModel<'a> {
         Self::new(mesh, LumpedParameters::defaults(mesh))
     }
 
+    /// Friction's elastic share λ = μ × the rolling sense (`mesh_law`), on the drive flank; the
+    /// coast flank, the pair mirrored with its speeds reversed, takes −λ.
+    pub fn friction_share(&self) -> f64 {
+        self.params.friction_coefficient * self.params.rolling_sense
+    }
+
+    /// The sense the pair rolls in at a state, regularized as friction is: the sliding at the
+    /// recess end of the path, v = ω₁ρ₁(E) − ω₂ρ₂(E), as v/√(v² + v_ε²). There it is largest and
+    /// positive when the pair turns forward.
+    pub fn rolling_sense(&self, s: &LumpedState) -> f64 {
+        let m = self.mesh;
+        let v = s.omega_1 * m.path_end_m - s.omega_2 * (m.loa_m - m.path_end_m);
+        let eps = self.params.sliding_regularization_m_per_s;
+        v / (v * v + eps * eps).sqrt()
+    }
+
     /// The mesh force law at a state (see the module comment).
     pub fn mesh_state(&self, s: &LumpedState) -> MeshState {
         let m = self.mesh;
@@ -345,9 +386,13 @@ impl<'a> LumpedModel<'a> {
         let mut out = MeshState { transmission_error_m: delta, ..Default::default() };
         // Each flank's law is zero until its no-load transmission error (zero for unmodified
         // flanks, a relief's opening where they are modified), and so is its damper.
-        let drive = m.drive.evaluate(delta, xi);
-        let coast =
-            if drive.force_n > 0.0 { MeshForce::default() } else { m.coast.evaluate(-(delta + m.backlash_m), xi) };
+        let lambda = self.friction_share();
+        let drive = m.drive.evaluate_with_friction(delta, xi, lambda);
+        let coast = if drive.force_n > 0.0 {
+            MeshForce::default()
+        } else {
+            m.coast.evaluate_with_friction(-(delta + m.backlash_m), xi, -lambda)
+        };
         if drive.force_n > 0.0 {
             let law = drive;
             out.elastic_force_n = law.force_n;
@@ -451,6 +496,7 @@ impl<'a> LumpedModel<'a> {
             input_work_j: torques[0] * s.omega_1 + torques[1] * s.omega_2,
             dissipated_j: (mesh.force_n - mesh.elastic_force_n) * delta_dot,
             friction_dissipated_j: friction.power_w,
+            friction_elastic_work_j: 0.0,
         }
     }
 
@@ -476,6 +522,7 @@ impl<'a> LumpedModel<'a> {
                 + 2.0 * k2.friction_dissipated_j
                 + 2.0 * k3.friction_dissipated_j
                 + k4.friction_dissipated_j,
+            friction_elastic_work_j: 0.0,
         };
         axpy(s, h / 6.0, &sum)
     }
@@ -499,5 +546,6 @@ fn axpy(s: &LumpedState, a: f64, d: &LumpedState) -> LumpedState {
         input_work_j: s.input_work_j + a * d.input_work_j,
         dissipated_j: s.dissipated_j + a * d.dissipated_j,
         friction_dissipated_j: s.friction_dissipated_j + a * d.friction_dissipated_j,
+        friction_elastic_work_j: s.friction_elastic_work_j + a * d.friction_elastic_work_j,
     }
 }

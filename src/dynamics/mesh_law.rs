@@ -14,6 +14,15 @@
 //! deflections — ∂V/∂ξ at fixed δ equals −∂W*/∂ξ at fixed F (envelope theorem). Both are exact
 //! for the interpolated table, so the force on the roll coordinate, ∂W*/∂ξ, keeps the model
 //! conservative. For a linear law δ = F/K(ξ) it is −½K′(ξ)δ².
+//!
+//! Tooth friction's elastic share (FE-fed laws, issue 42). Friction loads the teeth along the
+//! flanks, and that load moves them along the line of action too: at a mesh force F the
+//! deflection is δ_k(ξ) + λ·e_k(ξ), with e = ∂δ/∂μ at fixed F from the statics with friction
+//! (`rom::static_mesh_law`) and λ = μ × the sense the pair turns in (+1 forward, as the statics;
+//! −1 reversed; 0 at rest, where the regularized friction vanishes). For a λ held fixed the law
+//! is a table like any other and keeps its potential, with W* + λ·∫e dF; where λ changes (a new
+//! μ, a reversal) the potential changes at fixed δ by −λ's change × ∫e dF, which the lumped
+//! model books (`LumpedState::friction_elastic_work_j`).
 
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +35,24 @@ pub struct MeshLaw {
     pub deflection_m: Vec<f64>,
     /// W*_k(ξᵢ) = ∫₀^{F_k} δ dF at each row and level, cumulative (J).
     pub complementary_energy_j: Vec<f64>,
+    /// Tooth friction's elastic share e_k(ξᵢ) = ∂δ_k(ξᵢ)/∂λ (m per unit λ), laid out as the
+    /// deflections; empty where the law has none (the analytic law, a frictionless build).
+    pub friction_deflection_m: Vec<f64>,
+    /// ∫₀^{F_k} e dF, cumulative as `complementary_energy_j` (J per unit λ); empty with
+    /// `friction_deflection_m`.
+    pub friction_energy_j: Vec<f64>,
+}
+
+/// The cumulative trapezoid ∫₀^{F_k} row dF of each row (J): a law's complementary energy.
+fn cumulative_energy(force_levels_n: &[f64], rows: &[f64]) -> Vec<f64> {
+    let levels = force_levels_n.len();
+    let mut energy = vec![0.0; rows.len()];
+    for (row, w) in rows.chunks(levels).zip(energy.chunks_mut(levels)) {
+        for k in 1..levels {
+            w[k] = w[k - 1] + 0.5 * (row[k - 1] + row[k]) * (force_levels_n[k] - force_levels_n[k - 1]);
+        }
+    }
+    energy
 }
 
 /// The law evaluated at one (δ, ξ).
@@ -46,13 +73,48 @@ impl MeshLaw {
     pub fn new(base_pitch_m: f64, force_levels_n: Vec<f64>, deflection_m: Vec<f64>) -> Self {
         let levels = force_levels_n.len();
         assert!(levels >= 2 && force_levels_n[0] == 0.0 && deflection_m.len() % levels == 0);
-        let mut energy = vec![0.0; deflection_m.len()];
-        for (row, w) in deflection_m.chunks(levels).zip(energy.chunks_mut(levels)) {
-            for k in 1..levels {
-                w[k] = w[k - 1] + 0.5 * (row[k - 1] + row[k]) * (force_levels_n[k] - force_levels_n[k - 1]);
+        let energy = cumulative_energy(&force_levels_n, &deflection_m);
+        MeshLaw {
+            base_pitch_m,
+            force_levels_n,
+            deflection_m,
+            complementary_energy_j: energy,
+            friction_deflection_m: Vec::new(),
+            friction_energy_j: Vec::new(),
+        }
+    }
+
+    /// The law with tooth friction's elastic share e_k(ξᵢ) (m per unit λ, laid out as the
+    /// deflections). `Err` where it has the wrong length, or where λ of `max_lambda` in either
+    /// sense would make a row's deflection stop growing with the force (the law would not be
+    /// single-valued).
+    pub fn with_friction_share(mut self, per_lambda_m: Vec<f64>, max_lambda: f64) -> Result<Self, String> {
+        if per_lambda_m.len() != self.deflection_m.len() || per_lambda_m.iter().any(|e| !e.is_finite()) {
+            return Err(format!(
+                "friction's elastic share: {} finite values needed, one per deflection, got {}",
+                self.deflection_m.len(),
+                per_lambda_m.len()
+            ));
+        }
+        let k = self.force_levels_n.len();
+        for (i, (row, e)) in self.deflection_m.chunks(k).zip(per_lambda_m.chunks(k)).enumerate() {
+            for lambda in [-max_lambda, max_lambda] {
+                if let Some(m) = (1..k).find(|&m| !(row[m] + lambda * e[m] > row[m - 1] + lambda * e[m - 1])) {
+                    return Err(format!(
+                        "friction's elastic share at λ = {lambda} makes row {i}'s deflection stop growing from level {} to {m}",
+                        m - 1
+                    ));
+                }
             }
         }
-        MeshLaw { base_pitch_m, force_levels_n, deflection_m, complementary_energy_j: energy }
+        self.friction_energy_j = cumulative_energy(&self.force_levels_n, &per_lambda_m);
+        self.friction_deflection_m = per_lambda_m;
+        Ok(self)
+    }
+
+    /// Whether the law carries friction's elastic share.
+    pub fn has_friction_share(&self) -> bool {
+        !self.friction_deflection_m.is_empty()
     }
 
     /// Checks a law read from outside (a model file): the shape `new` asserts, and finite
@@ -66,14 +128,22 @@ impl MeshLaw {
             && self.force_levels_n.windows(2).all(|w| w[1] > w[0] && w[1].is_finite())
             && n >= levels
             && n % levels == 0
-            && self.complementary_energy_j.len() == n;
+            && self.complementary_energy_j.len() == n
+            && self.friction_deflection_m.len() == self.friction_energy_j.len()
+            && (self.friction_deflection_m.is_empty() || self.friction_deflection_m.len() == n);
         if !shape_ok {
             return Err(format!(
                 "the {name} mesh law is malformed: {levels} force levels (need ≥ 2, from 0, increasing), {n} deflections, {} energies",
                 self.complementary_energy_j.len()
             ));
         }
-        let finite = self.deflection_m.iter().chain(&self.complementary_energy_j).all(|x| x.is_finite());
+        let finite = self
+            .deflection_m
+            .iter()
+            .chain(&self.complementary_energy_j)
+            .chain(&self.friction_deflection_m)
+            .chain(&self.friction_energy_j)
+            .all(|x| x.is_finite());
         if !(finite && self.base_pitch_m.is_normal() && self.base_pitch_m > 0.0) {
             return Err(format!("the {name} mesh law holds a non-finite value or a non-positive base pitch"));
         }
@@ -84,23 +154,27 @@ impl MeshLaw {
         self.deflection_m.len() / self.force_levels_n.len()
     }
 
-    fn row(&self, i: usize) -> &[f64] {
+    /// Row i of the deflections and of the complementary energies at friction share λ.
+    fn row(&self, i: usize, lambda: f64) -> Row<'_> {
         let k = self.force_levels_n.len();
-        &self.deflection_m[i * k..(i + 1) * k]
-    }
-
-    fn energy_row(&self, i: usize) -> &[f64] {
-        let k = self.force_levels_n.len();
-        &self.complementary_energy_j[i * k..(i + 1) * k]
+        let span = i * k..(i + 1) * k;
+        let friction = (lambda != 0.0 && self.has_friction_share())
+            .then(|| (&self.friction_deflection_m[span.clone()], &self.friction_energy_j[span.clone()], lambda));
+        Row { deflection: &self.deflection_m[span.clone()], energy: &self.complementary_energy_j[span], friction }
     }
 
     /// Evaluates the law; zero for δ ≤ δ₀(ξ) (the flanks do not touch). Beyond the last level
     /// the last segment is extended.
     pub fn evaluate(&self, delta_m: f64, roll_m: f64) -> MeshForce {
+        self.evaluate_with_friction(delta_m, roll_m, 0.0)
+    }
+
+    /// The law at friction share λ (μ × the sense of rolling, see the module comment).
+    pub fn evaluate_with_friction(&self, delta_m: f64, roll_m: f64, lambda: f64) -> MeshForce {
         let dx = self.base_pitch_m / self.rows() as f64;
         let (i, j, t) = self.row_position(roll_m);
-        let (a, b) = (self.row(i), self.row(j));
-        let at = |k: usize| (1.0 - t) * a[k] + t * b[k];
+        let (a, b) = (self.row(i, lambda), self.row(j, lambda));
+        let at = |k: usize| (1.0 - t) * a.deflection(k) + t * b.deflection(k);
         if delta_m <= at(0) {
             return MeshForce::default();
         }
@@ -121,11 +195,11 @@ impl MeshLaw {
         let s = (delta_m - d0) / (d1 - d0);
         let force = f[m] + s * (f[m + 1] - f[m]);
         // W* of a row at this force: the cumulative part plus the trapezoid of the segment.
-        let w_row = |row: &[f64], w: &[f64]| {
-            let d_at_force = row[m] + s * (row[m + 1] - row[m]);
-            w[m] + 0.5 * (row[m] + d_at_force) * (force - f[m])
+        let w_row = |row: &Row| {
+            let d_at_force = row.deflection(m) + s * (row.deflection(m + 1) - row.deflection(m));
+            row.energy(m) + 0.5 * (row.deflection(m) + d_at_force) * (force - f[m])
         };
-        let (wa, wb) = (w_row(a, self.energy_row(i)), w_row(b, self.energy_row(j)));
+        let (wa, wb) = (w_row(&a), w_row(&b));
         let w_star = (1.0 - t) * wa + t * wb;
         MeshForce {
             force_n: force,
@@ -137,10 +211,37 @@ impl MeshLaw {
 
     /// Static deflection at force F and roll ξ (the static transmission error under F).
     pub fn static_deflection(&self, force_n: f64, roll_m: f64) -> f64 {
+        self.static_deflection_with_friction(force_n, roll_m, 0.0)
+    }
+
+    /// Static deflection at force F, roll ξ and friction share λ.
+    pub fn static_deflection_with_friction(&self, force_n: f64, roll_m: f64, lambda: f64) -> f64 {
         let (i, j, t) = self.row_position(roll_m);
         let (m, s) = self.level_position(force_n);
-        let d = |row: &[f64]| row[m] + s * (row[m + 1] - row[m]);
-        (1.0 - t) * d(self.row(i)) + t * d(self.row(j))
+        let d = |row: Row| row.deflection(m) + s * (row.deflection(m + 1) - row.deflection(m));
+        (1.0 - t) * d(self.row(i, lambda)) + t * d(self.row(j, lambda))
+    }
+
+    /// ∂V/∂λ at fixed δ and ξ (J per unit λ): −∫₀^F e dF at the law's force there (envelope
+    /// theorem, as for ξ). What a change of λ does to the stored energy, to first order.
+    pub fn potential_per_lambda(&self, delta_m: f64, roll_m: f64, lambda: f64) -> f64 {
+        if !self.has_friction_share() {
+            return 0.0;
+        }
+        let force = self.evaluate_with_friction(delta_m, roll_m, lambda).force_n;
+        if force == 0.0 {
+            return 0.0;
+        }
+        let (i, j, t) = self.row_position(roll_m);
+        let (m, s) = self.level_position(force);
+        let k = self.force_levels_n.len();
+        let f = &self.force_levels_n;
+        let w = |row: usize| {
+            let (e, w) = (&self.friction_deflection_m[row * k..], &self.friction_energy_j[row * k..]);
+            let e_at_force = e[m] + s * (e[m + 1] - e[m]);
+            w[m] + 0.5 * (e[m] + e_at_force) * (force - f[m])
+        };
+        -((1.0 - t) * w(i) + t * w(j))
     }
 
     /// Where roll ξ falls between the rows: (i, i + 1 modulo N, t) with ξ = (i + t)·p_b/N modulo
@@ -169,13 +270,19 @@ impl MeshLaw {
     }
 
     /// The largest tangent stiffness ∂F/∂δ anywhere in the table (N/m): the stiffest the mesh
-    /// gets (beyond the table's top force the law continues with its last slope).
+    /// gets (beyond the table's top force the law continues with its last slope), at any friction
+    /// share λ within ±μ_max (`gear::MAX_FRICTION_COEFFICIENT`).
     pub fn max_tangent_stiffness(&self) -> f64 {
         let f = &self.force_levels_n;
-        (0..self.rows())
-            .flat_map(|i| {
-                let row = self.row(i);
-                (1..f.len()).map(move |k| (f[k] - f[k - 1]) / (row[k] - row[k - 1]))
+        let max = crate::gear::MAX_FRICTION_COEFFICIENT;
+        let shares: &[f64] = if self.has_friction_share() { &[0.0, -max, max] } else { &[0.0] };
+        shares
+            .iter()
+            .flat_map(|&lambda| {
+                (0..self.rows()).flat_map(move |i| {
+                    let row = self.row(i, lambda);
+                    (1..f.len()).map(move |k| (f[k] - f[k - 1]) / (row.deflection(k) - row.deflection(k - 1)))
+                })
             })
             .filter(|k| k.is_finite() && *k > 0.0)
             .fold(0.0, f64::max)
@@ -193,6 +300,29 @@ impl MeshLaw {
             })
             .sum::<f64>()
             / n as f64
+    }
+}
+
+/// One row of a law at a friction share λ: δ_k + λ·e_k and W*_k + λ·∫e dF.
+struct Row<'a> {
+    deflection: &'a [f64],
+    energy: &'a [f64],
+    friction: Option<(&'a [f64], &'a [f64], f64)>,
+}
+
+impl Row<'_> {
+    fn deflection(&self, k: usize) -> f64 {
+        match self.friction {
+            Some((e, _, lambda)) => self.deflection[k] + lambda * e[k],
+            None => self.deflection[k],
+        }
+    }
+
+    fn energy(&self, k: usize) -> f64 {
+        match self.friction {
+            Some((_, w, lambda)) => self.energy[k] + lambda * w[k],
+            None => self.energy[k],
+        }
     }
 }
 

@@ -864,6 +864,8 @@ impl Model for GearPairFmu {
                     friction_coefficient: model.pair.friction_coefficient,
                     sliding_regularization_m_per_s: crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S,
                     lubrication: model.pair.lubricated_flanks.unwrap_or_default(),
+                    // The PMOR-Hertz model's friction acts on its own flanks: unused there.
+                    rolling_sense: 1.0,
                 },
             ),
         };
@@ -1102,14 +1104,19 @@ impl Model for GearPairFmu {
             let sized = LumpedParameters { friction_coefficient: largest_mu, ..s.params };
             s.params.sliding_regularization_m_per_s =
                 crate::dynamics::lumped::sliding_regularization_m_per_s(mesh, &sized, s.max_step_s);
-            // At rest friction is nil, so the equilibrium does not depend on μ.
-            let model = LumpedModel::new(mesh, s.dynamics_params());
+            // At rest friction is nil, and so is its elastic share: the equilibrium does not
+            // depend on μ.
             if s.start_at_equilibrium {
+                s.params.rolling_sense = 0.0;
+                let model = LumpedModel::new(mesh, s.dynamics_params());
                 s.mech = lumped_equilibrium(&model, s.start, s.torques_nm[0])?;
             }
-            s.start_energy_j = model.kinetic_energy(&s.mech) + model.mesh_state(&s.mech).potential_j;
+            let model = LumpedModel::new(mesh, s.dynamics_params());
             let force = model.mesh_state(&s.mech).force_n;
             self.applied_friction(s, force, s.mech.omega_1);
+            s.params.rolling_sense = LumpedModel::new(mesh, s.dynamics_params()).rolling_sense(&s.mech);
+            let model = LumpedModel::new(mesh, s.dynamics_params());
+            s.start_energy_j = model.kinetic_energy(&s.mech) + model.mesh_state(&s.mech).potential_j;
         }
         if let Physics::PmorHertz { model, place } = &self.physics {
             let dynamics = self.pmor(model, place, s);
@@ -1162,6 +1169,9 @@ impl Model for GearPairFmu {
                 ));
             }
         }
+        if !(s.params.rolling_sense.abs() <= 1.0) {
+            return Err(format!("the rolling sense {} is outside [−1, 1]", s.params.rolling_sense));
+        }
         let eps = s.params.sliding_regularization_m_per_s;
         if !(eps.is_finite() && eps >= crate::dynamics::mesh_friction::MIN_SLIDING_REGULARIZATION_M_PER_S) {
             return Err(format!("the friction's regularization speed {eps} m/s is not a finite speed ≥ 1 mm/s"));
@@ -1173,7 +1183,16 @@ impl Model for GearPairFmu {
         // Inputs, start values and the mechanical state: finite (set_reals refuses the rest).
         finite("tau_1/tau_2", &s.torques_nm)?;
         let l = |m: &LumpedState| {
-            [m.theta_1, m.omega_1, m.theta_2, m.omega_2, m.input_work_j, m.dissipated_j, m.friction_dissipated_j]
+            [
+                m.theta_1,
+                m.omega_1,
+                m.theta_2,
+                m.omega_2,
+                m.input_work_j,
+                m.dissipated_j,
+                m.friction_dissipated_j,
+                m.friction_elastic_work_j,
+            ]
         };
         finite("the start values", &l(&s.start))?;
         finite("the lumped state", &l(&s.mech))?;
@@ -1249,12 +1268,16 @@ impl Model for GearPairFmu {
                 return Ok(());
             }
         };
+        // ISO/TR 14179-2's μ and the rolling sense at the step's start, held over the step; what
+        // their change does to friction's elastic share, and so to the stored energy, is booked.
+        let before = LumpedModel::new(mesh, s.dynamics_params()).mesh_state(&s.mech).potential_j;
         if s.params.lubricated_flanks().is_some() {
-            // ISO/TR 14179-2's μ at the step's start, held over the step.
             let force = LumpedModel::new(mesh, s.dynamics_params()).mesh_state(&s.mech).force_n;
             self.applied_friction(s, force, s.mech.omega_1);
         }
+        s.params.rolling_sense = LumpedModel::new(mesh, s.dynamics_params()).rolling_sense(&s.mech);
         let model = LumpedModel::new(mesh, s.dynamics_params());
+        s.mech.friction_elastic_work_j += model.mesh_state(&s.mech).potential_j - before;
         let mut next = s.mech;
         model.advance(&mut next, s.torques_nm, h, s.max_step_s);
         let m = &next;
@@ -1268,7 +1291,7 @@ impl Model for GearPairFmu {
         // The work integrals start at zero at ExitInitializationMode, where E₀ was stored.
         energy_balance(
             [s.start_energy_j, stored(&next)],
-            [next.input_work_j, next.dissipated_j + next.friction_dissipated_j],
+            [next.input_work_j + next.friction_elastic_work_j, next.dissipated_j + next.friction_dissipated_j],
         )?;
         s.mech = next;
         let warnings = self.validity.check(model.mesh_state(&next).force_n, &mut s.warned);

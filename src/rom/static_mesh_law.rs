@@ -21,6 +21,14 @@
 //! nonlinear (`mesh_stiffness::force_levels`' spacing), and stop at the yield force
 //! (`closed_forms::rating`): the statics refuse a case beyond it, and the law continues past its last
 //! level with its last slope, where the FMU already logs the yield warning.
+//!
+//! Tooth friction's elastic share (`MeshLaw::with_friction_share`). Each case is solved again
+//! with friction μ_b = `FRICTION_SHARE_MU` (the statics' tangential loads and friction arms,
+//! `rom::statics`), at the same angle and torque. Its normal forces carry less or more than
+//! T₁/r_b1 (friction's torque carries the rest), so the row's friction points (F′_k, δ′_k) lie
+//! off the levels: δ′ is interpolated back to each F_k, and e_k = (δ′(F_k) − δ_k)/μ_b is the
+//! share per unit μ at fixed mesh force, the lumped model's variable (first order in μ; the
+//! lumped model's friction torques carry the arms, this table the teeth's bending under friction).
 
 use super::statics::StaticModel;
 use crate::contact::mesh_kinematics::Flank;
@@ -37,6 +45,10 @@ use serde::{Deserialize, Serialize};
 /// (the Hertz curve between quadratically spaced levels), 256 rows gain nothing at 12 levels.
 pub const TABLE_ROWS: usize = 128;
 pub const FORCE_LEVELS: usize = 24;
+
+/// The μ at which friction's elastic share is taken: the middle of lubricated gear steel's
+/// 0.02–0.1. The share is first order in μ (`tests/lumped_friction.rs` measures how linear).
+pub const FRICTION_SHARE_MU: f64 = 0.05;
 
 /// The force levels: F_k = F_top·(k/K)², F_top the smaller of 1500 N/mm of face width (the
 /// analytic law's top) and the yield force.
@@ -79,24 +91,26 @@ fn drive_law_from_statics_dyn(
     let done = std::sync::atomic::AtomicUsize::new(0);
     let layers = &model.gears[0].flank.layer_z_m;
     let z_mid: Vec<f64> = layers.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+    let with_friction = model.frictional(FRICTION_SHARE_MU)?;
     // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass),
-    // its pairs in contact and where its load is carried.
-    let ste_at = |roll: f64, torque: f64| -> Result<(f64, usize, Vec<(f64, f64)>), String> {
-        let solve = |delta: f64| {
-            let theta2 = ((roll - roll_offset - delta) / rb2).rem_euclid(pitch2);
-            model.solve(theta2, torque)
-        };
-        let first = solve(0.0)?;
-        let case = solve(first.ste_m)?;
+    // its pairs in contact and where its load is carried; and the same case with friction, as
+    // (its normal forces' share of T₁/r_b1, its STE), or None where those statics refuse it.
+    type Case = (f64, usize, Vec<(f64, f64)>, Option<(f64, f64)>);
+    let ste_at = |roll: f64, torque: f64| -> Result<Case, String> {
+        let theta2_of = |delta: f64| ((roll - roll_offset - delta) / rb2).rem_euclid(pitch2);
+        let first = model.solve(theta2_of(0.0), torque)?;
+        let theta2 = theta2_of(first.ste_m);
+        let case = model.solve(theta2, torque)?;
         let contacts = case.elements.iter().map(|e| (e.force_n, contact_point_m(pair, e))).collect();
-        Ok((case.ste_m, case.pairs_in_contact, contacts))
+        let friction = with_friction.solve(theta2, torque).ok().map(|c| (c.transverse_force_n, c.ste_m));
+        Ok((case.ste_m, case.pairs_in_contact, contacts, friction))
     };
     if levels.len() < 2 {
         return Err("the mesh law needs a force level above zero".into());
     }
     // Per roll position: the STE and the pairs in contact up the levels, until the statics refuse
     // one (then that level and its reason).
-    type Row = (Vec<f64>, Vec<u32>, Vec<Vec<(f64, f64)>>, Option<(usize, String)>);
+    type Row = (Vec<f64>, Vec<u32>, Vec<Vec<(f64, f64)>>, Option<(usize, String)>, Vec<(f64, f64)>);
     let table: Vec<Row> = (0..rows)
         .into_par_iter()
         .map(|i| {
@@ -116,16 +130,23 @@ fn drive_law_from_statics_dyn(
                 Ok(delta) => row[0] = delta,
                 Err(e) => {
                     let why = format!("roll {roll:.4e} m, no load: {e}");
-                    return (row, pairs, contacts, Some((0, why)));
+                    return (row, pairs, contacts, Some((0, why)), Vec::new());
                 }
             }
             let mut refused = None;
+            // Friction's points (F′, δ′), from no load on, while its statics solve.
+            let mut friction = vec![(0.0, row[0])];
+            let mut friction_solves = true;
             for (k, &force) in levels.iter().enumerate().skip(1) {
                 match ste_at(roll, force * rb1) {
-                    Ok((ste, n, c)) => {
+                    Ok((ste, n, c, f)) => {
                         row.push(ste);
                         pairs.push(n as u32);
                         contacts.push(c);
+                        match f {
+                            Some(point) if friction_solves => friction.push(point),
+                            _ => friction_solves = false,
+                        }
                     }
                     Err(e) => {
                         refused = Some((k, format!("roll {roll:.4e} m, force {force:.4e} N: {e}")));
@@ -136,12 +157,13 @@ fn drive_law_from_statics_dyn(
             // Under no load: the pairs the lightest load touches.
             pairs[0] = pairs.get(1).copied().unwrap_or(0);
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-            (row, pairs, contacts, refused)
+            (row, pairs, contacts, refused, friction)
         })
         .collect();
     // The highest level every roll position reached, and the first refusal that set it.
     let top = table.iter().map(|(row, ..)| row.len() - 1).min().unwrap_or(0);
-    let capped = table.iter().filter_map(|(.., r)| r.as_ref()).find(|(k, _)| *k == top + 1).map(|(_, why)| why.clone());
+    let capped =
+        table.iter().filter_map(|(.., r, _)| r.as_ref()).find(|(k, _)| *k == top + 1).map(|(_, why)| why.clone());
     let operating_force = 2.0 * pair.operating_torque_nm / rb1;
     if levels[top] < operating_force.min(levels[levels.len() - 1]) {
         return Err(format!(
@@ -155,7 +177,11 @@ fn drive_law_from_statics_dyn(
     let mut deflection = Vec::with_capacity(rows * kept.len());
     let mut pairs = Vec::with_capacity(rows * kept.len());
     let mut contacts = Vec::with_capacity(rows * kept.len());
-    for (i, (row, n, c, _)) in table.into_iter().enumerate() {
+    let mut friction_share = Vec::with_capacity(rows * kept.len());
+    for (i, (row, n, c, _, friction)) in table.into_iter().enumerate() {
+        friction_share.extend(friction_share_of_row(&row[..kept.len()], kept, &friction).map_err(|e| {
+            format!("mesh law from the statics, roll {:.4e} m: {e}", pair.base_pitch_m * i as f64 / rows as f64)
+        })?);
         // F(δ) must be single-valued: the deflection grows with the force.
         if let Some(k) = (1..kept.len()).find(|&k| !(row[k] > row[k - 1])) {
             return Err(format!(
@@ -171,8 +197,10 @@ fn drive_law_from_statics_dyn(
         pairs.extend_from_slice(&n[..kept.len()]);
         contacts.extend(c.into_iter().take(kept.len()));
     }
+    let law = MeshLaw::new(pair.base_pitch_m, kept.to_vec(), deflection)
+        .with_friction_share(friction_share, crate::gear::MAX_FRICTION_COEFFICIENT)?;
     Ok(StaticMeshLaw {
-        law: MeshLaw::new(pair.base_pitch_m, kept.to_vec(), deflection),
+        law,
         pairs,
         spread: ContactSpread::from_contacts(kept.len(), pair.base_pitch_m, &contacts)?,
         capped: capped.map(|why| format!("the table ends at {:.4e} N, where the statics refuse: {why}", kept[top])),
@@ -189,6 +217,31 @@ pub struct StaticMeshLaw {
     /// contacts, `mesh_friction`).
     pub spread: ContactSpread,
     pub capped: Option<String>,
+}
+
+/// e_k = (δ′(F_k) − δ_k)/μ_b of one row: δ′ interpolated at F_k between friction's points
+/// (F′, δ′), which start at (0, δ₀) and grow with F′. Beyond the last point (the top level, or
+/// where the friction statics refused a case) the last segment's slope continues.
+fn friction_share_of_row(row: &[f64], levels: &[f64], points: &[(f64, f64)]) -> Result<Vec<f64>, String> {
+    if points.len() < 2 {
+        return Err("the statics with friction solve no loaded case".into());
+    }
+    if let Some(w) = points.windows(2).find(|w| !(w[1].0 > w[0].0)) {
+        return Err(format!(
+            "with friction, the normal forces do not grow with the torque ({:.4e} → {:.4e} N)",
+            w[0].0, w[1].0
+        ));
+    }
+    Ok(levels
+        .iter()
+        .zip(row)
+        .map(|(&f, &d)| {
+            let m = points.partition_point(|p| p.0 <= f).clamp(1, points.len() - 1) - 1;
+            let (a, b) = (points[m], points[m + 1]);
+            let at_f = a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0);
+            (at_f - d) / FRICTION_SHARE_MU
+        })
+        .collect())
 }
 
 /// Where a static contact element touches, as a point u (m from T₁) of the transverse line of

@@ -73,6 +73,9 @@ pub struct StaticCase {
     pub ste_m: f64,
     /// Total normal contact force (N).
     pub mesh_force_n: f64,
+    /// The normal forces' share of T₁/r_b1, Σ P·s (N): the lumped model's mesh force along the
+    /// transverse line of action. T₁/r_b1 itself without friction; friction's torque is the rest.
+    pub transverse_force_n: f64,
     pub pairs_in_contact: usize,
     /// Elements carrying load.
     pub elements: Vec<ElementResult>,
@@ -212,6 +215,17 @@ impl<'a> StaticModel<'a> {
         }
         self.friction_coefficient = coefficient;
         Ok(self)
+    }
+
+    /// A copy of this model with tooth friction of coefficient μ (`with_friction`).
+    pub fn frictional(&self, coefficient: f64) -> Result<StaticModel<'a>, String> {
+        StaticModel {
+            placement: self.placement.clone(),
+            gears: self.gears,
+            contact: self.contact,
+            friction_coefficient: 0.0,
+        }
+        .with_friction(coefficient)
     }
 
     /// σ = sign(ω₁ρ₁ − ω₂ρ₂) of a contact at u (m from T₁ on the transverse line of action) of
@@ -483,6 +497,7 @@ impl<'a> StaticModel<'a> {
                     torque_nm,
                     ste_m: te,
                     mesh_force_n: loaded.iter().map(|e| e.force_n).sum(),
+                    transverse_force_n: loaded.iter().map(|e| e.force_n * e.arm_ratio).sum(),
                     pairs_in_contact: pairs.len(),
                     elements: loaded,
                     reduced: equilibrium.reduced,
