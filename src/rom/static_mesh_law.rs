@@ -47,7 +47,8 @@ pub const TABLE_ROWS: usize = 128;
 pub const FORCE_LEVELS: usize = 24;
 
 /// The μ at which friction's elastic share is taken: the middle of lubricated gear steel's
-/// 0.02–0.1. The share is first order in μ (`tests/lumped_friction.rs` measures how linear).
+/// 0.02–0.1. The share is first order in μ (`friction_statics::friction_changes_the_ste_to_first_order_in_mu`
+/// measures how linear).
 pub const FRICTION_SHARE_MU: f64 = 0.05;
 
 /// The force levels: F_k = F_top·(k/K)², F_top the smaller of 1500 N/mm of face width (the
