@@ -203,6 +203,9 @@ pub(crate) fn lumped_from_table(pair: &GearPair, table: gearfmu::rom::static_mes
     if let Some(why) = &table.capped {
         println!("note: {why}; beyond it the law continues with its last slope");
     }
+    if let Some(why) = &table.friction_share_missing {
+        println!("warning: {why}");
+    }
     LumpedMesh::from_drive_law(
         pair,
         gearfmu::dynamics::lumped::MeshLawSource::FeStatics,

@@ -233,10 +233,11 @@ pub fn mesh_damping_coefficient(mesh: &LumpedMesh, p: &LumpedParameters) -> f64 
     2.0 * p.mesh_damping_ratio * (mesh.reference_stiffness() * equivalent_mesh_mass(mesh, p)).sqrt()
 }
 
-/// The mesh law's largest tangent stiffness on either flank (N/m). It scans every entry of both
-/// tables, so the FMU computes it once per model file, not at each check of a step.
-pub fn stiffest_tangent_stiffness(mesh: &LumpedMesh) -> f64 {
-    mesh.drive.max_tangent_stiffness().max(mesh.coast.max_tangent_stiffness())
+/// The mesh law's largest tangent stiffness on either flank (N/m), at friction shares within
+/// ±`max_lambda` (0: frictionless). It scans every entry of both tables, so the FMU computes it
+/// once per model file, not at each check of a step.
+pub fn stiffest_tangent_stiffness(mesh: &LumpedMesh, max_lambda: f64) -> f64 {
+    mesh.drive.max_tangent_stiffness(max_lambda).max(mesh.coast.max_tangent_stiffness(max_lambda))
 }
 
 /// RK4's stability limit (s) on the stiffest mesh mode: the equivalent mesh mass on the mesh law's

@@ -222,28 +222,6 @@ impl MeshLaw {
         (1.0 - t) * d(self.row(i, lambda)) + t * d(self.row(j, lambda))
     }
 
-    /// ∂V/∂λ at fixed δ and ξ (J per unit λ): −∫₀^F e dF at the law's force there (envelope
-    /// theorem, as for ξ). What a change of λ does to the stored energy, to first order.
-    pub fn potential_per_lambda(&self, delta_m: f64, roll_m: f64, lambda: f64) -> f64 {
-        if !self.has_friction_share() {
-            return 0.0;
-        }
-        let force = self.evaluate_with_friction(delta_m, roll_m, lambda).force_n;
-        if force == 0.0 {
-            return 0.0;
-        }
-        let (i, j, t) = self.row_position(roll_m);
-        let (m, s) = self.level_position(force);
-        let k = self.force_levels_n.len();
-        let f = &self.force_levels_n;
-        let w = |row: usize| {
-            let (e, w) = (&self.friction_deflection_m[row * k..], &self.friction_energy_j[row * k..]);
-            let e_at_force = e[m] + s * (e[m + 1] - e[m]);
-            w[m] + 0.5 * (e[m] + e_at_force) * (force - f[m])
-        };
-        -((1.0 - t) * w(i) + t * w(j))
-    }
-
     /// Where roll ξ falls between the rows: (i, i + 1 modulo N, t) with ξ = (i + t)·p_b/N modulo
     /// p_b, t in [0, 1).
     pub fn row_position(&self, roll_m: f64) -> (usize, usize, f64) {
@@ -271,14 +249,14 @@ impl MeshLaw {
 
     /// The largest tangent stiffness ∂F/∂δ anywhere in the table (N/m): the stiffest the mesh
     /// gets (beyond the table's top force the law continues with its last slope), at any friction
-    /// share λ within ±μ_max (`gear::MAX_FRICTION_COEFFICIENT`).
-    pub fn max_tangent_stiffness(&self) -> f64 {
+    /// share λ within ±`max_lambda` (the share is linear in λ, so its ends and 0 bound it).
+    pub fn max_tangent_stiffness(&self, max_lambda: f64) -> f64 {
         let f = &self.force_levels_n;
-        let max = crate::gear::MAX_FRICTION_COEFFICIENT;
-        let shares: &[f64] = if self.has_friction_share() { &[0.0, -max, max] } else { &[0.0] };
+        let shares =
+            if self.has_friction_share() && max_lambda > 0.0 { vec![0.0, -max_lambda, max_lambda] } else { vec![0.0] };
         shares
-            .iter()
-            .flat_map(|&lambda| {
+            .into_iter()
+            .flat_map(|lambda| {
                 (0..self.rows()).flat_map(move |i| {
                     let row = self.row(i, lambda);
                     (1..f.len()).map(move |k| (f[k] - f[k - 1]) / (row.deflection(k) - row.deflection(k - 1)))

@@ -361,8 +361,9 @@ pub struct LoadedPair {
     guid: String,
     pub physics: Physics,
     /// Lumped: the mesh law's largest tangent stiffness (N/m), which sets RK4's stability limit
-    /// (0 for PMOR-Hertz, whose limit comes from its linearization).
-    stiffest_mesh_n_per_m: f64,
+    /// (0 for PMOR-Hertz, whose limit comes from its linearization): frictionless, and at any
+    /// friction share up to `gear::MAX_FRICTION_COEFFICIENT` (an instance with friction).
+    stiffest_mesh_n_per_m: [f64; 2],
     /// (value reference, variable), from variables.toml.
     lookup: Vec<(u32, Var)>,
     /// PMOR-Hertz: the integrator's stability limit (s) for parameters other than the build's (inertias,
@@ -437,8 +438,9 @@ impl LoadedPair {
             lookup.push((v.value_reference, var));
         }
         let stiffest_mesh_n_per_m = match &physics {
-            Physics::Lumped(mesh) => crate::dynamics::lumped::stiffest_tangent_stiffness(mesh),
-            Physics::PmorHertz { .. } => 0.0,
+            Physics::Lumped(mesh) => [0.0, crate::gear::MAX_FRICTION_COEFFICIENT]
+                .map(|max_lambda| crate::dynamics::lumped::stiffest_tangent_stiffness(mesh, max_lambda)),
+            Physics::PmorHertz { .. } => [0.0; 2],
         };
         let validity = match &physics {
             Physics::Lumped(mesh) => Validity {
@@ -582,7 +584,12 @@ impl GearPairFmu {
     fn check_stability(&self, s: &GearPairState) -> Result<(), String> {
         let (limit, integrator, what) = match &self.physics {
             Physics::Lumped(mesh) => (
-                crate::dynamics::lumped::rk4_stability_limit_s(mesh, &s.params, self.stiffest_mesh_n_per_m),
+                crate::dynamics::lumped::rk4_stability_limit_s(
+                    mesh,
+                    &s.params,
+                    self.stiffest_mesh_n_per_m
+                        [usize::from(s.params.friction_coefficient > 0.0 || s.params.lubricated_flanks().is_some())],
+                ),
                 "RK4",
                 "the stiffest mesh mode",
             ),

@@ -92,7 +92,9 @@ fn drive_law_from_statics_dyn(
     let done = std::sync::atomic::AtomicUsize::new(0);
     let layers = &model.gears[0].flank.layer_z_m;
     let z_mid: Vec<f64> = layers.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
-    let with_friction = model.frictional(FRICTION_SHARE_MU)?;
+    // A model that cannot carry friction (a standard CMS basis without the flank tangents) gives
+    // a law without the share, and says why (`StaticMeshLaw::friction_share_missing`).
+    let with_friction = model.frictional(FRICTION_SHARE_MU);
     // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass),
     // its pairs in contact and where its load is carried; and the same case with friction, as
     // (its normal forces' share of T₁/r_b1, its STE), or None where those statics refuse it.
@@ -103,7 +105,11 @@ fn drive_law_from_statics_dyn(
         let theta2 = theta2_of(first.ste_m);
         let case = model.solve(theta2, torque)?;
         let contacts = case.elements.iter().map(|e| (e.force_n, contact_point_m(pair, e))).collect();
-        let friction = with_friction.solve(theta2, torque).ok().map(|c| (c.transverse_force_n, c.ste_m));
+        let friction = with_friction
+            .as_ref()
+            .ok()
+            .and_then(|m| m.solve(theta2, torque).ok())
+            .map(|c| (c.transverse_force_n, c.ste_m));
         Ok((case.ste_m, case.pairs_in_contact, contacts, friction))
     };
     if levels.len() < 2 {
@@ -179,10 +185,16 @@ fn drive_law_from_statics_dyn(
     let mut pairs = Vec::with_capacity(rows * kept.len());
     let mut contacts = Vec::with_capacity(rows * kept.len());
     let mut friction_share = Vec::with_capacity(rows * kept.len());
+    let mut share_missing = with_friction.as_ref().err().cloned();
     for (i, (row, n, c, _, friction)) in table.into_iter().enumerate() {
-        friction_share.extend(friction_share_of_row(&row[..kept.len()], kept, &friction).map_err(|e| {
-            format!("mesh law from the statics, roll {:.4e} m: {e}", pair.base_pitch_m * i as f64 / rows as f64)
-        })?);
+        if share_missing.is_none() {
+            match friction_share_of_row(&row[..kept.len()], kept, &friction) {
+                Ok(share) => friction_share.extend(share),
+                Err(e) => {
+                    share_missing = Some(format!("roll {:.4e} m: {e}", pair.base_pitch_m * i as f64 / rows as f64))
+                }
+            }
+        }
         // F(δ) must be single-valued: the deflection grows with the force.
         if let Some(k) = (1..kept.len()).find(|&k| !(row[k] > row[k - 1])) {
             return Err(format!(
@@ -198,9 +210,16 @@ fn drive_law_from_statics_dyn(
         pairs.extend_from_slice(&n[..kept.len()]);
         contacts.extend(c.into_iter().take(kept.len()));
     }
-    let law = MeshLaw::new(pair.base_pitch_m, kept.to_vec(), deflection)
-        .with_friction_share(friction_share, crate::gear::MAX_FRICTION_COEFFICIENT)?;
+    let mut law = MeshLaw::new(pair.base_pitch_m, kept.to_vec(), deflection);
+    if share_missing.is_none() {
+        match law.clone().with_friction_share(friction_share, crate::gear::MAX_FRICTION_COEFFICIENT) {
+            Ok(with_share) => law = with_share,
+            Err(e) => share_missing = Some(e),
+        }
+    }
     Ok(StaticMeshLaw {
+        friction_share_missing: share_missing
+            .map(|why| format!("the law carries friction's torques only, not the teeth's answer to friction: {why}")),
         law,
         pairs,
         spread: ContactSpread::from_contacts(kept.len(), pair.base_pitch_m, &contacts)?,
@@ -218,6 +237,9 @@ pub struct StaticMeshLaw {
     /// contacts, `mesh_friction`).
     pub spread: ContactSpread,
     pub capped: Option<String>,
+    /// Why the law has no friction's elastic share (`MeshLaw::with_friction_share`), where it has
+    /// none: the statics could not carry friction, or the share failed its checks.
+    pub friction_share_missing: Option<String>,
 }
 
 /// e_k = (δ′(F_k) − δ_k)/μ_b of one row: δ′ interpolated at F_k between friction's points

@@ -141,8 +141,9 @@ pub struct StaticModel<'a> {
     pub placement: PairPlacement,
     pub gears: [&'a ReducedGear; 2],
     pub contact: ContactModel,
-    /// Coulomb's μ of tooth friction (0: frictionless, the default).
-    pub friction_coefficient: f64,
+    /// Coulomb's μ of tooth friction (0: frictionless, the default): set by `with_friction`,
+    /// which checks that the basis can carry it.
+    friction_coefficient: f64,
 }
 
 enum Law {
@@ -228,6 +229,11 @@ impl<'a> StaticModel<'a> {
         .with_friction(coefficient)
     }
 
+    /// Coulomb's μ of tooth friction (0: frictionless).
+    pub fn friction_coefficient(&self) -> f64 {
+        self.friction_coefficient
+    }
+
     /// σ = sign(ω₁ρ₁ − ω₂ρ₂) of a contact at u (m from T₁ on the transverse line of action) of
     /// a pair turning in its mesh sense, ω₂ = ω₁·r_b1/r_b2: −1 before the pitch point, +1
     /// beyond, 0 on it.
@@ -300,8 +306,17 @@ impl<'a> StaticModel<'a> {
                 let contact = c.line_contact(self.pair(), z[s + 1] - z[s], depth_m, law);
                 let point_m = line_of_action_point_m(self.pair(), c.kind, c.radius_m);
                 let (torque_arm, friction_per_normal) = self.friction_arms(c.arm_ratio, point_m);
-                // A point load until the first force gives the band its width.
-                let load = [self.load_row(0, &s1, friction_per_normal), self.load_row(1, &s2, friction_per_normal)];
+                // A point load along the gap's normal until the first force gives the band its
+                // width, and its friction.
+                let point_load = |i: usize, shares: &Shares| -> Vec<f64> {
+                    let mut row: Vec<f64> = gap[i].iter().map(|v| -v).collect();
+                    if friction_per_normal != 0.0 {
+                        let t = self.gears[i].tangential_load_row(shares);
+                        row.iter_mut().zip(&t).for_each(|(b, t)| *b -= friction_per_normal * t);
+                    }
+                    row
+                };
+                let load = [point_load(0, &s1), point_load(1, &s2)];
                 out.push(Element {
                     key: (j, s, 2, 0),
                     result: ElementResult {
