@@ -218,7 +218,9 @@ pub(crate) fn ste_command(
                 path
             }
         };
-        plot_ste(&csv, png, &format!("{}: static transmission error, {name}", pair.name))?;
+        let friction_label =
+            if friction > 0.0 { format!(", tooth friction μ = {}", sig(friction)) } else { String::new() };
+        plot_ste(&csv, png, &format!("{}: static transmission error, {name}{friction_label}", pair.name))?;
     }
     Ok(())
 }
