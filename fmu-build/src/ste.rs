@@ -65,6 +65,7 @@ pub(crate) fn ste_command(
     let layers = &reduced.gears[0].flank.layer_z_m;
     let penalty = matches!(method, Method::Penalty { .. });
     for &t in torques {
+        let at_t: Vec<_> = cases.iter().filter(|c| c.torque_nm == t).collect();
         let ste: Vec<f64> = cases.iter().filter(|c| c.torque_nm == t).map(|c| c.ste_m * 1e6).collect();
         let mean = ste.iter().sum::<f64>() / ste.len() as f64;
         let (lo, hi) = ste.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
@@ -89,7 +90,6 @@ pub(crate) fn ste_command(
             stiffness_mean_of_positions / iso
         );
         if friction > 0.0 {
-            let at_t: Vec<_> = cases.iter().filter(|c| c.torque_nm == t).collect();
             let mean_friction_torque = at_t.iter().map(|c| c.friction_torque_nm(pair)).sum::<f64>() / at_t.len() as f64;
             let mean_force = at_t.iter().map(|c| c.mesh_force_n).sum::<f64>() / at_t.len() as f64;
             println!(
@@ -126,7 +126,6 @@ pub(crate) fn ste_command(
         // ISO's K_Hβ is the face's load distribution: each section's load per face width averaged
         // over the positions of the mesh cycle (a helical pair's contact lines end at different z
         // at each instant, which alone makes one position's factor 1.5 on an aligned pair).
-        let at_t: Vec<_> = cases.iter().filter(|c| c.torque_nm == t).collect();
         let (mut mean_load, mut lengths) = (Vec::new(), Vec::new());
         for c in &at_t {
             let (load, l) = c.face_load(layers, penalty);

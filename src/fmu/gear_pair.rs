@@ -1121,7 +1121,7 @@ impl Model for GearPairFmu {
             let model = LumpedModel::new(mesh, s.dynamics_params());
             let force = model.mesh_state(&s.mech).force_n;
             self.applied_friction(s, force, s.mech.omega_1);
-            s.params.rolling_sense = LumpedModel::new(mesh, s.dynamics_params()).rolling_sense(&s.mech);
+            s.params.rolling_sense = model.rolling_sense(&s.mech);
             let model = LumpedModel::new(mesh, s.dynamics_params());
             s.start_energy_j = model.kinetic_energy(&s.mech) + model.mesh_state(&s.mech).potential_j;
         }
@@ -1277,14 +1277,18 @@ impl Model for GearPairFmu {
         };
         // ISO/TR 14179-2's μ and the rolling sense at the step's start, held over the step; what
         // their change does to friction's elastic share, and so to the stored energy, is booked.
-        let before = LumpedModel::new(mesh, s.dynamics_params()).mesh_state(&s.mech).potential_j;
+        let held = LumpedModel::new(mesh, s.dynamics_params());
         if s.params.lubricated_flanks().is_some() {
-            let force = LumpedModel::new(mesh, s.dynamics_params()).mesh_state(&s.mech).force_n;
+            let force = held.mesh_state(&s.mech).force_n;
             self.applied_friction(s, force, s.mech.omega_1);
         }
-        s.params.rolling_sense = LumpedModel::new(mesh, s.dynamics_params()).rolling_sense(&s.mech);
+        s.params.rolling_sense = held.rolling_sense(&s.mech);
         let model = LumpedModel::new(mesh, s.dynamics_params());
-        s.mech.friction_elastic_work_j += model.mesh_state(&s.mech).potential_j - before;
+        // Only a law that reads λ stores energy that depends on it (the FE-fed law with the share).
+        if model.friction_share() != held.friction_share() && mesh.drive.has_friction_share() {
+            s.mech.friction_elastic_work_j +=
+                model.mesh_state(&s.mech).potential_j - held.mesh_state(&s.mech).potential_j;
+        }
         let mut next = s.mech;
         model.advance(&mut next, s.torques_nm, h, s.max_step_s);
         let m = &next;

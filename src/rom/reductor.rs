@@ -88,22 +88,6 @@ impl LoadResponse {
             LoadResponse::Sparse(w) => w.iter().for_each(|&(k, v)| q[k] += scale * v),
         }
     }
-
-    /// self + scale·other: the response to two loads together (a normal load and its friction).
-    /// Both come from one gear, so they are both dense or both sparse.
-    pub fn plus(self, scale: f64, other: &LoadResponse) -> LoadResponse {
-        match (self, other) {
-            (LoadResponse::Dense(mut a), LoadResponse::Dense(b)) => {
-                a.iter_mut().zip(b).for_each(|(x, y)| *x += scale * y);
-                LoadResponse::Dense(a)
-            }
-            (LoadResponse::Sparse(mut a), LoadResponse::Sparse(b)) => {
-                a.extend(b.iter().map(|&(k, v)| (k, scale * v)));
-                LoadResponse::Sparse(a)
-            }
-            _ => unreachable!("one gear's responses are all dense or all sparse"),
-        }
-    }
 }
 
 /// Lifts reduced coordinates back to the free DOFs of the FE model.
@@ -173,20 +157,29 @@ impl ReducedGear {
 
     /// The reduced coordinates that unit forces along the nodes' transverse flank tangents
     /// (`FlankGrid::transverse_tangent`), shared as given, produce: K_r⁻¹ times
-    /// [`ReducedGear::tangential_load_row`]. `Err` for a standard CMS basis built without the
-    /// tangents: its span does not hold the response, and a Galerkin answer in it would pass a
-    /// basis error off as the baseline's.
+    /// [`ReducedGear::tangential_load_row`].
     pub fn tangential_load_response(&self, shares: &Shares) -> Result<LoadResponse, String> {
+        self.flank_load_response(shares, 0.0, 1.0)
+    }
+
+    /// The reduced coordinates of the flank load [`ReducedGear::flank_load_row`] describes,
+    /// K_r⁻¹ times it. `Err` where it has a tangential part and the basis is a standard CMS one
+    /// built without the tangents: its span does not hold the response, and a Galerkin answer in
+    /// it would pass a basis error off as the baseline's.
+    pub fn flank_load_response(&self, shares: &Shares, normal: f64, tangential: f64) -> Result<LoadResponse, String> {
         match self.coordinates {
-            Coordinates::UnitStiffness => Ok(LoadResponse::Dense(self.tangential_load_row(shares))),
-            Coordinates::NodalForces { tangents: true } => {
+            Coordinates::UnitStiffness => Ok(LoadResponse::Dense(self.flank_load_row(shares, normal, tangential))),
+            Coordinates::NodalForces { tangents } => {
+                if tangential != 0.0 && !tangents {
+                    return Err("tooth friction in the statics needs the standard CMS basis built with the flank \
+                                tangents (`standard_cms_with_flank_tangents`)"
+                        .into());
+                }
                 let n_c = self.flank.len();
-                Ok(LoadResponse::Sparse(shares.iter().map(|&(k, w)| (n_c + k, w)).collect()))
-            }
-            Coordinates::NodalForces { tangents: false } => {
-                Err("tooth friction in the statics needs the standard CMS basis built with the flank tangents \
-                 (`standard_cms_with_flank_tangents`)"
-                    .into())
+                let along_normal = shares.iter().filter(|_| normal != 0.0).map(|&(k, w)| (k, normal * w));
+                let along_tangent =
+                    shares.iter().filter(|_| tangential != 0.0).map(|&(k, w)| (n_c + k, tangential * w));
+                Ok(LoadResponse::Sparse(along_normal.chain(along_tangent).collect()))
             }
         }
     }
@@ -194,28 +187,28 @@ impl ReducedGear {
     /// The reduced load of forces of unit total along each node's transverse flank tangent
     /// t_k (`FlankGrid::transverse_tangent`), shared as given: Σ w_k·t_kᵀ·Ψ_k.
     pub fn tangential_load_row(&self, shares: &Shares) -> Vec<f64> {
-        let mut row = vec![0.0; self.size()];
-        for &(k, w) in shares {
-            let t = self.flank.transverse_tangent(k);
-            for c in 0..3 {
-                if t[c] != 0.0 {
-                    for (j, v) in row.iter_mut().enumerate() {
-                        *v += w * t[c] * self.flank_modes[(3 * k + c, j)];
-                    }
-                }
-            }
-        }
-        row
+        self.flank_load_row(shares, 0.0, 1.0)
     }
 
     /// The reduced load of forces of unit total along each node's inward normal, shared as given.
     pub fn inward_load_row(&self, shares: &Shares) -> Vec<f64> {
+        self.flank_load_row(shares, 1.0, 0.0)
+    }
+
+    /// The reduced load of forces shared as given, each node's `normal` along its inward normal
+    /// −n_k plus `tangential` along its transverse flank tangent t_k: Σ w_k·(−normal·n_k +
+    /// tangential·t_k)ᵀ·Ψ_k. A contact's normal load and its friction in one pass over the rows.
+    pub fn flank_load_row(&self, shares: &Shares, normal: f64, tangential: f64) -> Vec<f64> {
         let mut row = vec![0.0; self.size()];
         for &(k, w) in shares {
             let n = self.flank.nodes[k].1;
+            let t = if tangential != 0.0 { self.flank.transverse_tangent(k) } else { [0.0; 3] };
             for c in 0..3 {
-                for (j, v) in row.iter_mut().enumerate() {
-                    *v -= w * n[c] * self.flank_modes[(3 * k + c, j)];
+                let d = -normal * n[c] + tangential * t[c];
+                if d != 0.0 {
+                    for (j, v) in row.iter_mut().enumerate() {
+                        *v += w * d * self.flank_modes[(3 * k + c, j)];
+                    }
                 }
             }
         }

@@ -30,7 +30,7 @@
 //! share per unit μ at fixed mesh force, the lumped model's variable (first order in μ; the
 //! lumped model's friction torques carry the arms, this table the teeth's bending under friction).
 
-use super::statics::StaticModel;
+use super::statics::{StaticCase, StaticModel};
 use crate::contact::mesh_kinematics::Flank;
 use crate::dynamics::mesh_friction::ContactSpread;
 use crate::dynamics::mesh_law::MeshLaw;
@@ -95,22 +95,19 @@ fn drive_law_from_statics_dyn(
     // A model that cannot carry friction (a standard CMS basis without the flank tangents) gives
     // a law without the share, and says why (`StaticMeshLaw::friction_share_missing`).
     let with_friction = model.frictional(FRICTION_SHARE_MU);
-    // The STE of the case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass),
-    // its pairs in contact and where its load is carried; and the same case with friction, as
-    // (its normal forces' share of T₁/r_b1, its STE), or None where those statics refuse it.
-    type Case = (f64, usize, Vec<(f64, f64)>, Option<(f64, f64)>);
-    let ste_at = |roll: f64, torque: f64| -> Result<Case, String> {
+    // The case whose bore roll r_b1·θ₁ + ξ₀ is ξ, at torque T₁ (one fixed-point pass), and the
+    // gear-2 angle it settled at.
+    let case_at = |roll: f64, torque: f64| -> Result<(StaticCase, f64), String> {
         let theta2_of = |delta: f64| ((roll - roll_offset - delta) / rb2).rem_euclid(pitch2);
         let first = model.solve(theta2_of(0.0), torque)?;
         let theta2 = theta2_of(first.ste_m);
-        let case = model.solve(theta2, torque)?;
-        let contacts = case.elements.iter().map(|e| (e.force_n, contact_point_m(pair, e))).collect();
-        let friction = with_friction
-            .as_ref()
-            .ok()
-            .and_then(|m| m.solve(theta2, torque).ok())
-            .map(|c| (c.transverse_force_n, c.ste_m));
-        Ok((case.ste_m, case.pairs_in_contact, contacts, friction))
+        Ok((model.solve(theta2, torque)?, theta2))
+    };
+    // The same case with friction: its normal forces' share of T₁/r_b1 and its STE, or None
+    // where those statics refuse it.
+    let friction_at = |theta2: f64, torque: f64| -> Option<(f64, f64)> {
+        let case = with_friction.as_ref().ok()?.solve(theta2, torque).ok()?;
+        Some((case.transverse_force_n, case.ste_m))
     };
     if levels.len() < 2 {
         return Err("the mesh law needs a force level above zero".into());
@@ -141,18 +138,20 @@ fn drive_law_from_statics_dyn(
                 }
             }
             let mut refused = None;
-            // Friction's points (F′, δ′), from no load on, while its statics solve.
+            // Friction's points (F′, δ′), from no load on, until its statics first refuse a case.
             let mut friction = vec![(0.0, row[0])];
-            let mut friction_solves = true;
+            let mut friction_solves = with_friction.is_ok();
             for (k, &force) in levels.iter().enumerate().skip(1) {
-                match ste_at(roll, force * rb1) {
-                    Ok((ste, n, c, f)) => {
-                        row.push(ste);
-                        pairs.push(n as u32);
-                        contacts.push(c);
-                        match f {
-                            Some(point) if friction_solves => friction.push(point),
-                            _ => friction_solves = false,
+                match case_at(roll, force * rb1) {
+                    Ok((case, theta2)) => {
+                        row.push(case.ste_m);
+                        pairs.push(case.pairs_in_contact as u32);
+                        contacts.push(case.elements.iter().map(|e| (e.force_n, contact_point_m(pair, e))).collect());
+                        if friction_solves {
+                            match friction_at(theta2, force * rb1) {
+                                Some(point) => friction.push(point),
+                                None => friction_solves = false,
+                            }
                         }
                     }
                     Err(e) => {

@@ -58,14 +58,7 @@ impl StaticModel<'_> {
                 e.load_shares = shares;
             }
         }
-        let response = |i: usize| -> Result<LoadResponse, String> {
-            let normal = self.gears[i].load_response(&e.load_shares[i]);
-            if e.friction_per_normal == 0.0 {
-                return Ok(normal);
-            }
-            let tangential = self.gears[i].tangential_load_response(&e.load_shares[i])?;
-            Ok(normal.plus(-e.friction_per_normal, &tangential))
-        };
+        let response = |i: usize| self.gears[i].flank_load_response(&e.load_shares[i], 1.0, -e.friction_per_normal);
         Ok([response(0)?, response(1)?])
     }
 

@@ -211,7 +211,7 @@ impl<'a> StaticModel<'a> {
         }
         if coefficient > 0.0 {
             for g in self.gears {
-                g.tangential_load_response(&Vec::new())?;
+                g.flank_load_response(&Vec::new(), 0.0, 1.0)?;
             }
         }
         self.friction_coefficient = coefficient;
@@ -256,12 +256,7 @@ impl<'a> StaticModel<'a> {
     /// The reduced loads of gear `i` per unit normal force, shared as given: the inward normal's
     /// and friction's, b − μσ·t.
     fn load_row(&self, i: usize, shares: &Shares, friction_per_normal: f64) -> Vec<f64> {
-        let mut row = self.gears[i].inward_load_row(shares);
-        if friction_per_normal != 0.0 {
-            let t = self.gears[i].tangential_load_row(shares);
-            row.iter_mut().zip(&t).for_each(|(b, t)| *b -= friction_per_normal * t);
-        }
-        row
+        self.gears[i].flank_load_row(shares, 1.0, -friction_per_normal)
     }
 
     /// The depth h of the Hertz approach: the one the gears were reduced at.
@@ -311,8 +306,8 @@ impl<'a> StaticModel<'a> {
                 let point_load = |i: usize, shares: &Shares| -> Vec<f64> {
                     let mut row: Vec<f64> = gap[i].iter().map(|v| -v).collect();
                     if friction_per_normal != 0.0 {
-                        let t = self.gears[i].tangential_load_row(shares);
-                        row.iter_mut().zip(&t).for_each(|(b, t)| *b -= friction_per_normal * t);
+                        let friction = self.gears[i].flank_load_row(shares, 0.0, -friction_per_normal);
+                        row.iter_mut().zip(&friction).for_each(|(b, f)| *b += f);
                     }
                     row
                 };
